@@ -1,0 +1,217 @@
+//! The validated case: what a deck means, in SI units, with no TOML left in it.
+//!
+//! `deck` turns a TOML file into a [`Case`]; `setup` turns a [`Case`] into particles. Every value
+//! here has already been checked (positive densities, known materials, vectors of the deck's
+//! dimension…), so the code downstream never needs to re-validate user input. Each user-named item
+//! keeps the [`Location`] of its definition so that later checks (two bodies overlapping, say) can
+//! still point at the deck's line.
+
+/// A place in a deck file, for error messages (1-based line and column).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+pub struct Location {
+    pub line: usize,
+    pub column: usize,
+}
+
+/// Which smoothing kernel (see `kernel`).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+pub enum KernelKind {
+    #[default]
+    CubicSpline,
+    WendlandC2,
+}
+
+/// Everything a run needs.
+#[derive(Debug, Clone)]
+pub struct Case {
+    /// Case name (the deck's `[simulation] name`, or the deck file's stem).
+    pub name: String,
+    /// The deck file, as given (for messages).
+    pub file: String,
+    /// 2 (plane strain) or 3.
+    pub dimension: usize,
+    pub simulation: Simulation,
+    pub materials: Vec<MaterialSpec>,
+    pub bodies: Vec<BodySpec>,
+    /// Interactions the deck set explicitly; a pair of distinct bodies not listed is in `contact`
+    /// with default settings.
+    pub interactions: Vec<InteractionSpec>,
+    pub symmetry: Vec<SymmetryPlane>,
+    pub output: OutputSpec,
+}
+
+/// `[simulation]`: time, kernel, numerical dissipation, gravity.
+#[derive(Debug, Clone)]
+pub struct Simulation {
+    /// Simulated end time (s).
+    pub end_time: f64,
+    /// Courant number C_cfl of the time step (default 0.3).
+    pub cfl: f64,
+    /// Optional hard cap on steps.
+    pub max_steps: Option<u64>,
+    pub kernel: KernelKind,
+    /// h0 = smoothing_ratio × spacing (default 1.2).
+    pub smoothing_ratio: f64,
+    /// Monaghan–Gingold α (default 1) and β (default 2).
+    pub viscosity_alpha: f64,
+    pub viscosity_beta: f64,
+    /// Gravity (m/s²), z = 0 in 2D.
+    pub gravity: [f64; 3],
+    /// h stays within [h_min_ratio, h_max_ratio] × h0 (defaults 0.5 and 2).
+    pub h_min_ratio: f64,
+    pub h_max_ratio: f64,
+    /// Impact speed for default contact stiffness; None: the largest relative speed of the bodies.
+    pub impact_speed: Option<f64>,
+}
+
+/// A material: reference density, equation of state, strength, and options.
+#[derive(Debug, Clone, PartialEq)]
+pub struct MaterialSpec {
+    pub name: String,
+    pub location: Location,
+    /// ρ0 (kg/m³).
+    pub density: f64,
+    pub eos: EosSpec,
+    pub strength: StrengthSpec,
+    /// Pressure cut-off p_min (Pa, ≤ 0): pressure is never below it (spall).
+    pub pressure_cutoff: Option<f64>,
+    /// Artificial stress ε (Monaghan 2000), None: off.
+    pub artificial_stress: Option<f64>,
+}
+
+#[derive(Debug, Clone, PartialEq)]
+pub enum EosSpec {
+    /// p = K (ρ/ρ0 − 1).
+    Linear { bulk_modulus: f64 },
+    /// Mie–Grüneisen referenced to the Hugoniot (LS-DYNA EOS_GRUNEISEN).
+    MieGruneisen {
+        c0: f64,
+        s1: f64,
+        s2: f64,
+        s3: f64,
+        gamma0: f64,
+        a: f64,
+    },
+}
+
+#[derive(Debug, Clone, PartialEq)]
+pub enum StrengthSpec {
+    /// No deviatoric stress (a fluid).
+    Hydrodynamic,
+    /// Elastic, never yields.
+    Elastic { shear_modulus: f64 },
+    /// von Mises with linear isotropic hardening: Y = Y0 + hardening_modulus · εp.
+    VonMises {
+        shear_modulus: f64,
+        yield_stress: f64,
+        hardening_modulus: f64,
+    },
+}
+
+/// A body: one shape filled with particles on a lattice, one material.
+#[derive(Debug, Clone)]
+pub struct BodySpec {
+    pub name: String,
+    pub location: Location,
+    /// Index into `Case::materials`.
+    pub material: usize,
+    /// Lattice spacing Δp (m).
+    pub spacing: f64,
+    /// Initial velocity (m/s), z = 0 in 2D.
+    pub velocity: [f64; 3],
+    pub shape: Shape,
+    pub motion: Motion,
+}
+
+/// How a body moves.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+pub enum Motion {
+    /// Free: moves under its forces.
+    #[default]
+    Free,
+    /// Moves at its initial velocity whatever the forces (a piston, a fixed support when zero).
+    Prescribed,
+}
+
+/// Shapes. Particles sit at `min + (i + ½) Δp` of the shape's bounding box, inside the shape.
+#[derive(Debug, Clone, PartialEq)]
+pub enum Shape {
+    /// 3D box (or 2D rectangle: z ignored).
+    Box { min: [f64; 3], max: [f64; 3] },
+    /// 3D sphere (or 2D disc).
+    Sphere { center: [f64; 3], radius: f64 },
+    /// 3D cylinder: base centre, unit axis, radius, length.
+    Cylinder {
+        base: [f64; 3],
+        axis: [f64; 3],
+        radius: f64,
+        length: f64,
+    },
+    /// Annulus in 2D (ring), or hollow sphere in 3D.
+    Ring {
+        center: [f64; 3],
+        inner_radius: f64,
+        outer_radius: f64,
+    },
+}
+
+/// How two bodies meet.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub enum InteractionKind {
+    /// The paper's contact force, eq. (5); None: the default.
+    Contact {
+        stiffness: Option<f64>,
+        exponent: Option<f64>,
+    },
+    /// Conventional SPH: the bodies meet through the conservation equations.
+    Welded,
+}
+
+#[derive(Debug, Clone)]
+pub struct InteractionSpec {
+    pub location: Location,
+    /// Indices into `Case::bodies`, distinct.
+    pub bodies: [usize; 2],
+    pub kind: InteractionKind,
+}
+
+/// A symmetry plane x_axis = position (mirrored ghost particles).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct SymmetryPlane {
+    pub axis: usize,
+    pub position: f64,
+}
+
+/// `[output]`.
+#[derive(Debug, Clone)]
+pub struct OutputSpec {
+    /// Snapshot every this much simulated time (None: only first and last).
+    pub snapshot_interval: Option<f64>,
+    /// A history row every this many steps (default 10).
+    pub history_every: u64,
+    pub pictures: Vec<PictureSpec>,
+}
+
+/// Field a picture colours particles by.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+pub enum ColorBy {
+    #[default]
+    Body,
+    Pressure,
+    PlasticStrain,
+    Velocity,
+    Density,
+    VonMises,
+}
+
+/// A cross-section picture: particles in a slab |x_axis − position| < thickness/2, at given times.
+#[derive(Debug, Clone, PartialEq)]
+pub struct PictureSpec {
+    pub times: Vec<f64>,
+    /// Normal axis of the section plane (0, 1, 2); in 2D pictures show the whole plane.
+    pub normal_axis: usize,
+    pub position: f64,
+    /// Slab thickness (m); None: one spacing of the finest body.
+    pub thickness: Option<f64>,
+    pub color_by: ColorBy,
+}

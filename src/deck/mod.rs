@@ -1,0 +1,1 @@
+//! TOML case decks → validated [`crate::case::Case`].

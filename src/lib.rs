@@ -1,0 +1,15 @@
+//! strike: smoothed particle hydrodynamics for solid bodies under impact, with the frictionless
+//! particle contact of Vignjevic, De Vuyst & Campbell, "A Frictionless Contact Algorithm for
+//! Meshless Methods", CMES 13(1) 35–48 (2006).
+//!
+//! Data flows one way: [`deck`] → [`setup`] → [`particles`] → each step ([`neighbors`] →
+//! [`physics`] + [`contact`] + [`boundary`] → [`integrate`]) → [`output`].
+
+pub mod case;
+pub mod deck;
+pub mod error;
+pub mod particles;
+pub mod output;
+pub mod tensor;
+
+pub use error::{Error, Result};

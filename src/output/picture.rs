@@ -1,0 +1,1 @@
+//! Cross-section and history pictures (PNG, embedded font).

@@ -1,0 +1,1 @@
+//! VTK XML PolyData snapshots (.vtp, raw appended binary) and the .pvd time series.

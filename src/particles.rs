@@ -1,0 +1,183 @@
+//! Structure-of-arrays particle store, generic over the dimension `D` (2: plane strain, 3).
+//!
+//! Real particles come first (`0..n_real`); symmetry-plane ghosts, rebuilt every step by
+//! `boundary`, follow them. Physics loops run over real particles and read ghosts as neighbours.
+
+use nalgebra::{SMatrix, SVector};
+
+/// A point or vector in D dimensions.
+pub type Vector<const D: usize> = SVector<f64, D>;
+/// A D×D tensor (stress, velocity gradient).
+pub type Tensor<const D: usize> = SMatrix<f64, D, D>;
+
+/// Per-particle state. Indices are particle numbers; `id` follows a particle through reordering.
+#[derive(Debug, Clone, Default)]
+pub struct Particles<const D: usize> {
+    /// Position x (m).
+    pub x: Vec<Vector<D>>,
+    /// Velocity v (m/s): at the half step t_{n−½} between steps (leapfrog).
+    pub v: Vec<Vector<D>>,
+    /// Mass m (kg).
+    pub m: Vec<f64>,
+    /// Density ρ (kg/m³).
+    pub rho: Vec<f64>,
+    /// Specific internal energy e (J/kg).
+    pub e: Vec<f64>,
+    /// Pressure p (Pa), from the EOS.
+    pub p: Vec<f64>,
+    /// Sound speed c = √((K_s + 4G/3)/ρ) (m/s).
+    pub c: Vec<f64>,
+    /// Deviatoric stress S (Pa). In 2D plane strain the stored 2×2 block is the in-plane part and
+    /// S_zz = −(S_xx + S_yy) (see [`crate::tensor::out_of_plane`]).
+    pub s: Vec<Tensor<D>>,
+    /// Smoothing length h (m) and its initial value h0.
+    pub h: Vec<f64>,
+    pub h0: Vec<f64>,
+    /// Equivalent plastic strain εp.
+    pub eps_p: Vec<f64>,
+    /// Body index (into the case's bodies).
+    pub body: Vec<u32>,
+    /// Original particle number (stable through reordering; ghosts carry their source's).
+    pub id: Vec<u32>,
+    /// Contact force on the particle (N), from the last force evaluation.
+    pub contact_force: Vec<Vector<D>>,
+    /// Number of real particles; `len() - n_real` are ghosts.
+    pub n_real: usize,
+}
+
+impl<const D: usize> Particles<D> {
+    /// All particles, ghosts included.
+    pub fn len(&self) -> usize {
+        self.x.len()
+    }
+
+    pub fn is_empty(&self) -> bool {
+        self.x.is_empty()
+    }
+
+    /// Volume V = m/ρ.
+    pub fn volume(&self, i: usize) -> f64 {
+        self.m[i] / self.rho[i]
+    }
+
+    /// Cauchy stress σ = −p I + S.
+    pub fn stress(&self, i: usize) -> Tensor<D> {
+        self.s[i] - Tensor::<D>::identity() * self.p[i]
+    }
+
+    /// Append one particle (all derived fields zero; `h0 = h`).
+    #[allow(clippy::too_many_arguments)]
+    pub fn push(&mut self, x: Vector<D>, v: Vector<D>, m: f64, rho: f64, h: f64, body: u32) {
+        let id = self.x.len() as u32;
+        self.x.push(x);
+        self.v.push(v);
+        self.m.push(m);
+        self.rho.push(rho);
+        self.e.push(0.0);
+        self.p.push(0.0);
+        self.c.push(0.0);
+        self.s.push(Tensor::<D>::zeros());
+        self.h.push(h);
+        self.h0.push(h);
+        self.eps_p.push(0.0);
+        self.body.push(body);
+        self.id.push(id);
+        self.contact_force.push(Vector::<D>::zeros());
+        self.n_real = self.x.len();
+    }
+
+    /// Drop ghosts, keeping the real particles.
+    pub fn truncate_to_real(&mut self) {
+        let n = self.n_real;
+        self.x.truncate(n);
+        self.v.truncate(n);
+        self.m.truncate(n);
+        self.rho.truncate(n);
+        self.e.truncate(n);
+        self.p.truncate(n);
+        self.c.truncate(n);
+        self.s.truncate(n);
+        self.h.truncate(n);
+        self.h0.truncate(n);
+        self.eps_p.truncate(n);
+        self.body.truncate(n);
+        self.id.truncate(n);
+        self.contact_force.truncate(n);
+    }
+
+    /// Append a copy of particle `i` (used for ghosts); returns its index.
+    pub fn push_copy(&mut self, i: usize) -> usize {
+        self.x.push(self.x[i]);
+        self.v.push(self.v[i]);
+        self.m.push(self.m[i]);
+        self.rho.push(self.rho[i]);
+        self.e.push(self.e[i]);
+        self.p.push(self.p[i]);
+        self.c.push(self.c[i]);
+        self.s.push(self.s[i]);
+        self.h.push(self.h[i]);
+        self.h0.push(self.h0[i]);
+        self.eps_p.push(self.eps_p[i]);
+        self.body.push(self.body[i]);
+        self.id.push(self.id[i]);
+        self.contact_force.push(self.contact_force[i]);
+        self.x.len() - 1
+    }
+
+    /// Reorder real particles by `order` (new position k holds old particle order[k]).
+    pub fn permute(&mut self, order: &[usize]) {
+        fn apply<T: Copy>(v: &mut Vec<T>, order: &[usize]) {
+            let old = std::mem::take(v);
+            v.extend(order.iter().map(|&k| old[k]));
+        }
+        self.truncate_to_real();
+        apply(&mut self.x, order);
+        apply(&mut self.v, order);
+        apply(&mut self.m, order);
+        apply(&mut self.rho, order);
+        apply(&mut self.e, order);
+        apply(&mut self.p, order);
+        apply(&mut self.c, order);
+        apply(&mut self.s, order);
+        apply(&mut self.h, order);
+        apply(&mut self.h0, order);
+        apply(&mut self.eps_p, order);
+        apply(&mut self.body, order);
+        apply(&mut self.id, order);
+        apply(&mut self.contact_force, order);
+    }
+
+    /// Position as a 3-vector (z = 0 in 2D), for output.
+    pub fn position3(&self, i: usize) -> [f64; 3] {
+        to3(&self.x[i])
+    }
+
+    /// Velocity as a 3-vector (z = 0 in 2D), for output.
+    pub fn velocity3(&self, i: usize) -> [f64; 3] {
+        to3(&self.v[i])
+    }
+}
+
+/// A D-vector as 3 components, zero-padded.
+pub fn to3<const D: usize>(a: &Vector<D>) -> [f64; 3] {
+    let mut out = [0.0; 3];
+    for k in 0..D.min(3) {
+        out[k] = a[k];
+    }
+    out
+}
+
+/// The first D components of a 3-array.
+pub fn from3<const D: usize>(a: [f64; 3]) -> Vector<D> {
+    Vector::<D>::from_fn(|k, _| a[k])
+}
+
+/// Estimated memory per particle in bytes (state, rates, neighbour list, search), used by
+/// `strike check` and the deck's memory check. Measured by `strike bench`.
+pub fn estimated_bytes_per_particle(dimension: usize) -> usize {
+    if dimension == 2 {
+        400
+    } else {
+        1024
+    }
+}

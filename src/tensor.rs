@@ -1,0 +1,92 @@
+//! Small tensor helpers shared by the material models, the artificial stress and the output.
+
+use crate::particles::Tensor;
+
+/// Out-of-plane deviatoric component: S_zz = −tr S in 2D plane strain (S is traceless in 3D),
+/// 0 in 3D (where it is already part of S).
+pub fn out_of_plane<const D: usize>(s: &Tensor<D>) -> f64 {
+    if D == 2 {
+        -s.trace()
+    } else {
+        0.0
+    }
+}
+
+/// S:S including the plane-strain S_zz.
+pub fn deviator_norm2<const D: usize>(s: &Tensor<D>) -> f64 {
+    let szz = out_of_plane(s);
+    s.component_mul(s).sum() + szz * szz
+}
+
+/// von Mises equivalent stress σ_eq = √(3/2 S:S), S_zz included in 2D.
+pub fn von_mises<const D: usize>(s: &Tensor<D>) -> f64 {
+    (1.5 * deviator_norm2(s)).sqrt()
+}
+
+/// Eigen-decomposition of a symmetric D×D matrix by cyclic Jacobi rotations:
+/// returns (eigenvalues, eigenvectors as columns), A = Q diag(λ) Qᵀ. Exact to round-off for
+/// the 2×2 and 3×3 stresses it is used on.
+pub fn symmetric_eigen<const D: usize>(a: &Tensor<D>) -> ([f64; D], Tensor<D>) {
+    let mut a = *a;
+    let mut q = Tensor::<D>::identity();
+    for _sweep in 0..32 {
+        let mut off = 0.0;
+        for p in 0..D {
+            for r in p + 1..D {
+                off += a[(p, r)] * a[(p, r)];
+            }
+        }
+        let scale = a.component_mul(&a).sum();
+        if off <= 1e-30 * scale || off == 0.0 {
+            break;
+        }
+        for p in 0..D {
+            for r in p + 1..D {
+                let apr = a[(p, r)];
+                if apr == 0.0 {
+                    continue;
+                }
+                let theta = (a[(r, r)] - a[(p, p)]) / (2.0 * apr);
+                let t = theta.signum() / (theta.abs() + (theta * theta + 1.0).sqrt());
+                let t = if theta == 0.0 { 1.0 } else { t };
+                let c = 1.0 / (t * t + 1.0).sqrt();
+                let s = t * c;
+                let mut rot = Tensor::<D>::identity();
+                rot[(p, p)] = c;
+                rot[(r, r)] = c;
+                rot[(p, r)] = s;
+                rot[(r, p)] = -s;
+                a = rot.transpose() * a * rot;
+                q *= rot;
+            }
+        }
+    }
+    let mut lambda = [0.0; D];
+    for (k, l) in lambda.iter_mut().enumerate() {
+        *l = a[(k, k)];
+    }
+    (lambda, q)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use approx::assert_relative_eq;
+
+    #[test]
+    fn eigen_reconstructs_3d() {
+        let a = Tensor::<3>::new(4.0, 1.0, -2.0, 1.0, 3.0, 0.5, -2.0, 0.5, -1.0);
+        let (l, q) = symmetric_eigen(&a);
+        let d = Tensor::<3>::from_diagonal(&nalgebra::Vector3::new(l[0], l[1], l[2]));
+        let back = q * d * q.transpose();
+        assert_relative_eq!(back, a, epsilon = 1e-12);
+        assert_relative_eq!(l.iter().sum::<f64>(), a.trace(), epsilon = 1e-12);
+    }
+
+    #[test]
+    fn von_mises_uniaxial_plane_strain() {
+        // 3D deviator of uniaxial stress σ along x: S = σ diag(2/3, −1/3, −1/3) → σ_eq = σ.
+        let s = Tensor::<2>::new(2.0 / 3.0, 0.0, 0.0, -1.0 / 3.0) * 5.0;
+        assert_relative_eq!(von_mises(&s), 5.0, epsilon = 1e-12);
+    }
+}
