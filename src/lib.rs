@@ -8,6 +8,8 @@
 pub mod case;
 pub mod deck;
 pub mod error;
+pub mod kernel;
+pub mod material;
 pub mod particles;
 pub mod output;
 pub mod tensor;

@@ -1,0 +1,137 @@
+//! Equations of state p(ρ, e).
+
+/// An equation of state: pressure from density and specific internal energy.
+pub trait Eos: Send + Sync + std::fmt::Debug {
+    /// p(ρ, e) (Pa).
+    fn pressure(&self, rho: f64, e: f64) -> f64;
+    /// Isentropic bulk modulus K_s = ρ (∂p/∂ρ)_s = ρ (∂p/∂ρ)_e + (p/ρ)(∂p/∂e)_ρ (Pa).
+    fn bulk_modulus(&self, rho: f64, e: f64) -> f64;
+}
+
+/// Linear EOS p = K (ρ/ρ0 − 1), for elastic test problems.
+#[derive(Debug, Clone, Copy)]
+pub struct LinearEos {
+    pub rho0: f64,
+    pub bulk_modulus: f64,
+}
+
+impl Eos for LinearEos {
+    fn pressure(&self, rho: f64, _e: f64) -> f64 {
+        self.bulk_modulus * (rho / self.rho0 - 1.0)
+    }
+
+    fn bulk_modulus(&self, rho: f64, _e: f64) -> f64 {
+        self.bulk_modulus * rho / self.rho0
+    }
+}
+
+/// Mie–Grüneisen EOS referenced to the Hugoniot, in LS-DYNA's EOS_GRUNEISEN form, with
+/// μ = ρ/ρ0 − 1 and E = ρ0 e (energy per reference volume):
+///
+/// compression (μ > 0):
+///   p = ρ0 C² μ [1 + (1 − γ0/2) μ − (a/2) μ²] / [1 − (S1 − 1) μ − S2 μ²/(μ+1) − S3 μ³/(μ+1)²]²
+///       + (γ0 + a μ) E
+/// tension (μ ≤ 0): p = ρ0 C² μ + (γ0 + a μ) E.
+///
+/// Its cold Hugoniot is the linear U_s = C + S1 u_p shock (S2 = S3 = 0): along it the
+/// Rankine–Hugoniot jump p = ρ0 U_s u_p holds exactly (tested below).
+#[derive(Debug, Clone, Copy)]
+pub struct MieGruneisen {
+    pub rho0: f64,
+    pub c0: f64,
+    pub s1: f64,
+    pub s2: f64,
+    pub s3: f64,
+    pub gamma0: f64,
+    pub a: f64,
+}
+
+impl MieGruneisen {
+    /// (p, dp/dμ at constant E) for the given μ and E.
+    fn p_and_slope(&self, mu: f64, big_e: f64) -> (f64, f64) {
+        let k = self.rho0 * self.c0 * self.c0;
+        let gamma = self.gamma0 + self.a * mu;
+        if mu > 0.0 {
+            let num = k * mu * (1.0 + (1.0 - 0.5 * self.gamma0) * mu - 0.5 * self.a * mu * mu);
+            let dnum = k * (1.0 + 2.0 * (1.0 - 0.5 * self.gamma0) * mu - 1.5 * self.a * mu * mu);
+            let mp1 = mu + 1.0;
+            let den = 1.0
+                - (self.s1 - 1.0) * mu
+                - self.s2 * mu * mu / mp1
+                - self.s3 * mu * mu * mu / (mp1 * mp1);
+            let dden = -(self.s1 - 1.0)
+                - self.s2 * mu * (mu + 2.0) / (mp1 * mp1)
+                - self.s3 * mu * mu * (mu + 3.0) / (mp1 * mp1 * mp1);
+            let p = num / (den * den) + gamma * big_e;
+            let slope = dnum / (den * den) - 2.0 * num * dden / (den * den * den) + self.a * big_e;
+            (p, slope)
+        } else {
+            (k * mu + gamma * big_e, k + self.a * big_e)
+        }
+    }
+}
+
+impl Eos for MieGruneisen {
+    fn pressure(&self, rho: f64, e: f64) -> f64 {
+        self.p_and_slope(rho / self.rho0 - 1.0, self.rho0 * e).0
+    }
+
+    fn bulk_modulus(&self, rho: f64, e: f64) -> f64 {
+        let mu = rho / self.rho0 - 1.0;
+        let (p, slope) = self.p_and_slope(mu, self.rho0 * e);
+        // (∂p/∂ρ)_e = slope/ρ0 ; (∂p/∂e)_ρ = (γ0 + a μ) ρ0.
+        rho * slope / self.rho0 + p / rho * (self.gamma0 + self.a * mu) * self.rho0
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use approx::assert_relative_eq;
+
+    fn al2024() -> MieGruneisen {
+        MieGruneisen {
+            rho0: 2785.0,
+            c0: 5328.0,
+            s1: 1.338,
+            s2: 0.0,
+            s3: 0.0,
+            gamma0: 2.0,
+            a: 0.0,
+        }
+    }
+
+    /// On the Hugoniot of a shock with particle velocity u: U_s = C + S1 u,
+    /// ρ = ρ0 U_s/(U_s − u), e = u²/2, p_H = ρ0 U_s u. The EOS must return p_H.
+    #[test]
+    fn hugoniot_jump() {
+        let m = al2024();
+        for u in [100.0, 1000.0, 3500.0] {
+            let us = m.c0 + m.s1 * u;
+            let rho = m.rho0 * us / (us - u);
+            let p = m.pressure(rho, 0.5 * u * u);
+            assert_relative_eq!(p, m.rho0 * us * u, max_relative = 1e-12);
+        }
+    }
+
+    #[test]
+    fn reference_state_and_sound_speed() {
+        let m = al2024();
+        assert_eq!(m.pressure(m.rho0, 0.0), 0.0);
+        assert_relative_eq!(m.bulk_modulus(m.rho0, 0.0), m.rho0 * m.c0 * m.c0, max_relative = 1e-14);
+        assert_relative_eq!(m.pressure(0.9 * m.rho0, 0.0), -0.1 * m.rho0 * m.c0 * m.c0, max_relative = 1e-14);
+    }
+
+    #[test]
+    fn bulk_modulus_matches_isentropic_derivative() {
+        // K_s = ρ dp/dρ along de = p/ρ² dρ.
+        let m = MieGruneisen { a: 0.5, s2: 0.3, s3: 0.1, ..al2024() };
+        for (rho, e) in [(3200.0, 2e5), (2500.0, 1e4), (4000.0, 3e6)] {
+            let d = rho * 1e-7;
+            let p = m.pressure(rho, e);
+            let de = p / (rho * rho) * d;
+            let fd = rho * (m.pressure(rho + d, e + de) - m.pressure(rho - d, e - de)) / (2.0 * d);
+            assert_relative_eq!(m.bulk_modulus(rho, e), fd, max_relative = 1e-6);
+        }
+    }
+}
