@@ -5,12 +5,19 @@
 //! Data flows one way: [`deck`] → [`setup`] → [`particles`] → each step ([`neighbors`] →
 //! [`physics`] + [`contact`] + [`boundary`] → [`integrate`]) → [`output`].
 
+pub mod boundary;
 pub mod case;
+pub mod contact;
 pub mod deck;
 pub mod error;
+pub mod integrate;
 pub mod kernel;
 pub mod material;
+pub mod neighbors;
 pub mod particles;
+pub mod physics;
+pub mod setup;
+pub mod simulation;
 pub mod output;
 pub mod tensor;
 

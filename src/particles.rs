@@ -15,8 +15,13 @@ pub type Tensor<const D: usize> = SMatrix<f64, D, D>;
 pub struct Particles<const D: usize> {
     /// Position x (m).
     pub x: Vec<Vector<D>>,
-    /// Velocity v (m/s): at the half step t_{n−½} between steps (leapfrog).
+    /// Velocity v (m/s) at the whole step t_n (predicted from the leapfrog velocity; what the
+    /// rates and the output use).
     pub v: Vec<Vector<D>>,
+    /// Leapfrog velocity at the half step t_{n−½} (m/s).
+    pub vh: Vec<Vector<D>>,
+    /// Acceleration of the last step (m/s²), for the velocity predictor.
+    pub a: Vec<Vector<D>>,
     /// Mass m (kg).
     pub m: Vec<f64>,
     /// Density ρ (kg/m³).
@@ -71,6 +76,8 @@ impl<const D: usize> Particles<D> {
         let id = self.x.len() as u32;
         self.x.push(x);
         self.v.push(v);
+        self.vh.push(v);
+        self.a.push(Vector::<D>::zeros());
         self.m.push(m);
         self.rho.push(rho);
         self.e.push(0.0);
@@ -91,6 +98,8 @@ impl<const D: usize> Particles<D> {
         let n = self.n_real;
         self.x.truncate(n);
         self.v.truncate(n);
+        self.vh.truncate(n);
+        self.a.truncate(n);
         self.m.truncate(n);
         self.rho.truncate(n);
         self.e.truncate(n);
@@ -109,6 +118,8 @@ impl<const D: usize> Particles<D> {
     pub fn push_copy(&mut self, i: usize) -> usize {
         self.x.push(self.x[i]);
         self.v.push(self.v[i]);
+        self.vh.push(self.vh[i]);
+        self.a.push(self.a[i]);
         self.m.push(self.m[i]);
         self.rho.push(self.rho[i]);
         self.e.push(self.e[i]);
@@ -133,6 +144,8 @@ impl<const D: usize> Particles<D> {
         self.truncate_to_real();
         apply(&mut self.x, order);
         apply(&mut self.v, order);
+        apply(&mut self.vh, order);
+        apply(&mut self.a, order);
         apply(&mut self.m, order);
         apply(&mut self.rho, order);
         apply(&mut self.e, order);

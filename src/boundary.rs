@@ -1,0 +1,87 @@
+//! Symmetry planes by mirrored ghost particles.
+//!
+//! For a plane x_k = c, every particle (real, or a ghost of an earlier plane) within the
+//! largest support 2 h_max of the plane gets a ghost at its mirror image: x_k → 2c − x_k,
+//! v_k → −v_k, and the stress components with exactly one index k change sign (S_kl, l ≠ k);
+//! everything else (mass, density, energy, pressure, h, body) is copied. Mirroring the ghosts of
+//! earlier planes too fills the corners of a quarter model. Ghosts keep their body, so contact
+//! works across a symmetry plane.
+
+use crate::particles::Particles;
+
+/// A symmetry plane x_axis = position; the model lives on the side `side` (+1: x_axis ≥ c,
+/// −1: x_axis ≤ c).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Plane {
+    pub axis: usize,
+    pub position: f64,
+    pub side: f64,
+}
+
+impl Plane {
+    /// Signed distance of a coordinate into the model side.
+    pub fn depth(&self, coordinate: f64) -> f64 {
+        self.side * (coordinate - self.position)
+    }
+}
+
+/// Drop the old ghosts and build new ones from the current real state.
+pub fn rebuild_ghosts<const D: usize>(p: &mut Particles<D>, planes: &[Plane]) {
+    p.truncate_to_real();
+    if planes.is_empty() {
+        return;
+    }
+    let reach = 2.0 * p.h.iter().copied().fold(0.0_f64, f64::max);
+    for plane in planes {
+        let k = plane.axis;
+        let c = plane.position;
+        let n = p.len();
+        for i in 0..n {
+            if plane.depth(p.x[i][k]) < reach {
+                let g = p.push_copy(i);
+                mirror(p, g, k, c);
+            }
+        }
+    }
+}
+
+fn mirror<const D: usize>(p: &mut Particles<D>, g: usize, k: usize, c: f64) {
+    p.x[g][k] = 2.0 * c - p.x[g][k];
+    p.v[g][k] = -p.v[g][k];
+    p.vh[g][k] = -p.vh[g][k];
+    p.a[g][k] = -p.a[g][k];
+    p.contact_force[g][k] = -p.contact_force[g][k];
+    for l in 0..D {
+        if l != k {
+            p.s[g][(k, l)] = -p.s[g][(k, l)];
+            p.s[g][(l, k)] = -p.s[g][(l, k)];
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::particles::{Tensor, Vector};
+
+    #[test]
+    fn quarter_model_corner_gets_three_ghosts() {
+        let mut p = Particles::<3>::default();
+        p.push(Vector::<3>::new(0.1, 0.2, 5.0), Vector::<3>::new(1.0, 2.0, 3.0), 1.0, 1.0, 0.5, 0);
+        p.s[0] = Tensor::<3>::new(1.0, 2.0, 3.0, 2.0, 4.0, 5.0, 3.0, 5.0, -5.0);
+        let planes = [
+            Plane { axis: 0, position: 0.0, side: 1.0 },
+            Plane { axis: 1, position: 0.0, side: 1.0 },
+        ];
+        rebuild_ghosts(&mut p, &planes);
+        assert_eq!(p.len(), 4);
+        assert_eq!(p.n_real, 1);
+        // The diagonal ghost: both x and y mirrored; S_xy keeps its sign, S_xz and S_yz flip.
+        assert_eq!(p.x[3], Vector::<3>::new(-0.1, -0.2, 5.0));
+        assert_eq!(p.v[3], Vector::<3>::new(-1.0, -2.0, 3.0));
+        assert_eq!(p.s[3], Tensor::<3>::new(1.0, 2.0, -3.0, 2.0, 4.0, -5.0, -3.0, -5.0, -5.0));
+        // Rebuilding replaces the ghosts, it does not add to them.
+        rebuild_ghosts(&mut p, &planes);
+        assert_eq!(p.len(), 4);
+    }
+}

@@ -1,0 +1,269 @@
+//! The SPH equations of solid dynamics (updated Lagrangian, conventional SPH), evaluated in one
+//! gather pass over each real particle's neighbours. Per pair, with x_ij = x_i − x_j,
+//! v_ij = v_i − v_j, h_ij = (h_i + h_j)/2 and ∇_i W_ij = (dW/dr) x_ij/r_ij:
+//!
+//! - continuity: dρ_i/dt = Σ_{j∈N_i} m_j v_ij·∇_i W_ij
+//! - velocity gradient: L_i = −Σ_{j∈N_i} V_j v_ij ⊗ ∇_i W_ij
+//! - momentum: dv_i/dt = Σ_{j∈N_i} m_j T_ij ∇_i W_ij + f_c,i/m_i + g,
+//!   T_ij = σ_i/ρ_i² + σ_j/ρ_j² − Π_ij I + A_ij
+//! - energy: de_i/dt = −½ Σ_{j∈N_i} m_j v_ij·(T_ij ∇_i W_ij), the pairwise form whose sum
+//!   Σ m_i de_i/dt is exactly minus the power of the internal forces, so total energy is
+//!   conserved by the spatial discretisation (DESIGN.md §2 allows it in place of σ:D/ρ).
+//!
+//! N_i are neighbours of the same body or of a `welded` body; C_i, neighbours of a body in
+//! `contact`, enter only through [`crate::contact`] (the paper's W = 0 across bodies).
+
+pub mod artificial_stress;
+pub mod viscosity;
+
+use crate::contact::{self, ContactParams};
+use crate::kernel::Kernel;
+use crate::material::Material;
+use crate::neighbors::NeighborList;
+use crate::particles::{Particles, Tensor, Vector};
+use rayon::prelude::*;
+
+/// How particles of two bodies interact.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub enum PairRule {
+    /// Through the conservation equations (same body, or welded bodies).
+    Conserve,
+    /// Through the contact force only.
+    Contact(ContactParams),
+}
+
+/// The rule for every ordered pair of bodies (symmetric).
+#[derive(Debug, Clone, Default)]
+pub struct PairTable {
+    n: usize,
+    rules: Vec<PairRule>,
+}
+
+impl PairTable {
+    /// All distinct bodies in contact with `params(a, b)`, each body conserving with itself.
+    pub fn new(n: usize, mut params: impl FnMut(usize, usize) -> PairRule) -> Self {
+        let mut rules = vec![PairRule::Conserve; n * n];
+        for a in 0..n {
+            for b in a + 1..n {
+                let r = params(a, b);
+                rules[a * n + b] = r;
+                rules[b * n + a] = r;
+            }
+        }
+        PairTable { n, rules }
+    }
+
+    #[inline(always)]
+    pub fn rule(&self, a: u32, b: u32) -> &PairRule {
+        &self.rules[a as usize * self.n + b as usize]
+    }
+
+    pub fn bodies(&self) -> usize {
+        self.n
+    }
+}
+
+/// Everything the equations need that is not particle state.
+#[derive(Debug)]
+pub struct Model<const D: usize> {
+    pub materials: Vec<Material>,
+    /// Material index of each body.
+    pub body_material: Vec<usize>,
+    /// Prescribed velocity of each body (None: free).
+    pub body_prescribed: Vec<Option<Vector<D>>>,
+    pub pairs: PairTable,
+    pub alpha: f64,
+    pub beta: f64,
+    pub gravity: Vector<D>,
+    pub cfl: f64,
+    /// h0 / Δp.
+    pub smoothing_ratio: f64,
+    pub h_min_ratio: f64,
+    pub h_max_ratio: f64,
+}
+
+impl<const D: usize> Model<D> {
+    pub fn material_of(&self, body: u32) -> &Material {
+        &self.materials[self.body_material[body as usize]]
+    }
+}
+
+/// Rates of change and per-particle diagnostics from one pass (indices of real particles).
+#[derive(Debug, Default, Clone)]
+pub struct Rates<const D: usize> {
+    /// dv/dt (m/s²), contact and gravity included.
+    pub acc: Vec<Vector<D>>,
+    /// dρ/dt.
+    pub drho: Vec<f64>,
+    /// de/dt.
+    pub de: Vec<f64>,
+    /// Velocity gradient L = ∂v/∂x.
+    pub grad_v: Vec<Tensor<D>>,
+    /// Contact force f_c (N).
+    pub contact_force: Vec<Vector<D>>,
+    /// Half the contact potential of each of the particle's contact pairs (J): the sum over
+    /// particles is Φ.
+    pub contact_energy: Vec<f64>,
+    /// Stable time step of the particle (s).
+    pub dt: Vec<f64>,
+    /// Smallest r_ij/Δp_avg to a particle of another body (∞ if none).
+    pub min_contact_gap: Vec<f64>,
+    /// Per-particle σ/ρ² and artificial stress R (all particles, ghosts included).
+    sr2: Vec<Tensor<D>>,
+    art: Vec<Tensor<D>>,
+}
+
+/// Evaluate all rates at the particles' current state (positions, velocities `p.v`, stress).
+pub fn compute_rates<const D: usize, K: Kernel>(
+    kernel: K,
+    p: &Particles<D>,
+    nl: &NeighborList,
+    model: &Model<D>,
+    out: &mut Rates<D>,
+) {
+    let n = p.n_real;
+    let all = p.len();
+    // Per-particle factors, ghosts included.
+    out.sr2.resize(all, Tensor::<D>::zeros());
+    out.art.resize(all, Tensor::<D>::zeros());
+    let mut any_art = false;
+    for m in &model.materials {
+        any_art |= m.artificial_stress.is_some();
+    }
+    out.sr2
+        .par_iter_mut()
+        .zip(out.art.par_iter_mut())
+        .enumerate()
+        .for_each(|(i, (sr2, art))| {
+            let sigma = p.stress(i);
+            *sr2 = sigma / (p.rho[i] * p.rho[i]);
+            *art = match model.material_of(p.body[i]).artificial_stress {
+                Some(eps) => artificial_stress::tensor(&sigma, p.rho[i], eps),
+                None => Tensor::<D>::zeros(),
+            };
+        });
+    out.acc.resize(n, Vector::<D>::zeros());
+    out.drho.resize(n, 0.0);
+    out.de.resize(n, 0.0);
+    out.grad_v.resize(n, Tensor::<D>::zeros());
+    out.contact_force.resize(n, Vector::<D>::zeros());
+    out.contact_energy.resize(n, 0.0);
+    out.dt.resize(n, 0.0);
+    out.min_contact_gap.resize(n, f64::INFINITY);
+
+    let sr2 = &out.sr2;
+    let art = &out.art;
+    let (alpha, beta) = (model.alpha, model.beta);
+    let ratio = model.smoothing_ratio;
+    let gravity = model.gravity;
+    let cfl = model.cfl;
+
+    let per_particle = out
+        .acc
+        .par_iter_mut()
+        .zip(out.drho.par_iter_mut())
+        .zip(out.de.par_iter_mut())
+        .zip(out.grad_v.par_iter_mut())
+        .zip(out.contact_force.par_iter_mut())
+        .zip(out.contact_energy.par_iter_mut())
+        .zip(out.dt.par_iter_mut())
+        .zip(out.min_contact_gap.par_iter_mut())
+        .enumerate();
+    per_particle.for_each(
+        |(i, (((((((acc_o, drho_o), de_o), l_o), fc_o), phi_o), dt_o), gap_o))| {
+            let xi = p.x[i];
+            let vi = p.v[i];
+            let hi = p.h[i];
+            let bi = p.body[i];
+            let rho_i = p.rho[i];
+            let ci = p.c[i];
+            let vol_i = p.m[i] / rho_i;
+            let sr2_i = sr2[i];
+            let art_i = art[i];
+            let dp_i = p.h0[i] / ratio;
+
+            let mut acc = Vector::<D>::zeros();
+            let mut fc = Vector::<D>::zeros();
+            let mut l = Tensor::<D>::zeros();
+            let mut drho = 0.0;
+            let mut de = 0.0;
+            let mut phi = 0.0;
+            let mut k_contact = 0.0;
+            let mut mu_max = 0.0_f64;
+            let mut v2_max = 0.0_f64;
+            let mut gap = f64::INFINITY;
+
+            for &j in &nl.lists[i] {
+                let j = j as usize;
+                let xij = xi - p.x[j];
+                let r2 = xij.norm_squared();
+                if r2 == 0.0 {
+                    continue;
+                }
+                let r = r2.sqrt();
+                let hij = 0.5 * (hi + p.h[j]);
+                let dw = kernel.dw::<D>(r, hij);
+                let grad = xij * (dw / r);
+                let vij = vi - p.v[j];
+                v2_max = v2_max.max(vij.norm_squared());
+                match model.pairs.rule(bi, p.body[j]) {
+                    PairRule::Conserve => {
+                        let mj = p.m[j];
+                        let rho_j = p.rho[j];
+                        let vdotgrad = vij.dot(&grad);
+                        drho += mj * vdotgrad;
+                        l -= (vij * grad.transpose()) * (mj / rho_j);
+                        let (pi, mu) = viscosity::monaghan_gingold(
+                            vij.dot(&xij),
+                            r2,
+                            hij,
+                            0.5 * (ci + p.c[j]),
+                            0.5 * (rho_i + rho_j),
+                            alpha,
+                            beta,
+                        );
+                        mu_max = mu_max.max(-mu);
+                        let mut t = sr2_i + sr2[j];
+                        if any_art {
+                            let a = art_i + art[j];
+                            if a != Tensor::<D>::zeros() {
+                                let dp = 0.5 * (dp_i + p.h0[j] / ratio);
+                                let f = kernel.w::<D>(r, hij) / kernel.w::<D>(dp, hij);
+                                t += a * f.powi(artificial_stress::EXPONENT);
+                            }
+                        }
+                        let tg = t * grad - grad * pi;
+                        acc += tg * mj;
+                        de -= 0.5 * mj * vij.dot(&tg);
+                    }
+                    PairRule::Contact(params) => {
+                        let vol_j = p.m[j] / p.rho[j];
+                        let (coef, pot, k) =
+                            contact::pair::<D, K>(kernel, params, vol_i, vol_j, r, hij, dw);
+                        fc += grad * coef;
+                        phi += 0.5 * pot;
+                        k_contact += k;
+                        gap = gap.min(r / params.spacing);
+                    }
+                }
+            }
+
+            let mi = p.m[i];
+            *acc_o = acc + fc / mi + gravity;
+            *drho_o = drho;
+            *de_o = de;
+            *l_o = l;
+            *fc_o = fc;
+            *phi_o = phi;
+            *gap_o = gap;
+            // Time step: sound, relative motion and viscosity (Monaghan 1992), and the contact
+            // springs (ω² = Σk/m, leapfrog stable for ω Δt < 2).
+            let signal = ci + v2_max.sqrt() + 0.6 * (alpha * ci + beta * mu_max);
+            let mut dt = cfl * hi / signal;
+            if k_contact > 0.0 {
+                dt = dt.min(cfl * 2.0 * (mi / k_contact).sqrt());
+            }
+            *dt_o = dt;
+        },
+    );
+}

@@ -1,0 +1,225 @@
+//! Setup: a validated [`Case`] → particles on lattices and the [`Model`] the equations use.
+
+pub mod shapes;
+
+use crate::boundary::Plane;
+use crate::case::{BodySpec, Case, EosSpec, InteractionKind, Motion};
+use crate::contact::{self, ContactParams};
+use crate::error::{DeckLocation, Error, Result};
+use crate::material::Material;
+use crate::neighbors::NeighborList;
+use crate::particles::{from3, Particles, Vector};
+use crate::physics::{Model, PairRule, PairTable};
+
+/// Default contact exponent n (Monaghan's artificial-stress exponent).
+pub const DEFAULT_EXPONENT: f64 = 4.0;
+
+/// Particles and model for a case. Errors (bodies overlapping, a body left without particles)
+/// name the deck's line.
+pub fn build<const D: usize>(case: &Case) -> Result<(Particles<D>, Model<D>)> {
+    let planes = symmetry_planes(case);
+    let materials: Vec<Material> = case.materials.iter().map(Material::from_spec).collect();
+    let mut p = Particles::<D>::default();
+    for (b, body) in case.bodies.iter().enumerate() {
+        let mat = &materials[body.material];
+        let dp = body.spacing;
+        let h0 = case.simulation.smoothing_ratio * dp;
+        let mass = mat.rho0 * dp.powi(D as i32);
+        let v = from3::<D>(body.velocity);
+        let before = p.len();
+        for x in shapes::lattice::<D>(&body.shape, dp, &planes) {
+            p.push(x, v, mass, mat.rho0, h0, b as u32);
+            let i = p.len() - 1;
+            p.p[i] = mat.pressure(mat.rho0, 0.0);
+            p.c[i] = mat.sound_speed(mat.rho0, 0.0);
+        }
+        if p.len() == before {
+            return Err(deck_error(
+                case,
+                body.location,
+                &format!("body[{b}].shape"),
+                format!("body '{}' has no particle: its shape holds no lattice point at spacing {dp:e} m (on the model's side of the symmetry planes)", body.name),
+                "make the shape larger than the spacing, or the spacing smaller",
+            ));
+        }
+    }
+    check_overlap(case, &p)?;
+
+    let body_material = case.bodies.iter().map(|b| b.material).collect();
+    let body_prescribed = case
+        .bodies
+        .iter()
+        .map(|b| (b.motion == Motion::Prescribed).then(|| from3::<D>(b.velocity)))
+        .collect();
+    let pairs = PairTable::new(case.bodies.len(), |a, b| pair_rule(case, &materials, a, b));
+    let s = &case.simulation;
+    let model = Model {
+        materials,
+        body_material,
+        body_prescribed,
+        pairs,
+        alpha: s.viscosity_alpha,
+        beta: s.viscosity_beta,
+        gravity: from3::<D>(s.gravity),
+        cfl: s.cfl,
+        smoothing_ratio: s.smoothing_ratio,
+        h_min_ratio: s.h_min_ratio,
+        h_max_ratio: s.h_max_ratio,
+    };
+    Ok((p, model))
+}
+
+/// The deck's symmetry planes with their model side: the side of the centre of all bodies'
+/// bounding boxes (the positive side when that centre lies on the plane, as for a sphere cut
+/// in quarters).
+pub fn symmetry_planes(case: &Case) -> Vec<Plane> {
+    let mut lo = [f64::INFINITY; 3];
+    let mut hi = [f64::NEG_INFINITY; 3];
+    for b in &case.bodies {
+        let (l, h) = shapes::bounding_box(&b.shape);
+        for k in 0..3 {
+            lo[k] = lo[k].min(l[k]);
+            hi[k] = hi[k].max(h[k]);
+        }
+    }
+    case.symmetry
+        .iter()
+        .map(|s| {
+            let centre = 0.5 * (lo[s.axis] + hi[s.axis]);
+            let side = if centre >= s.position - 1e-12 * (hi[s.axis] - lo[s.axis]).abs() {
+                1.0
+            } else {
+                -1.0
+            };
+            Plane {
+                axis: s.axis,
+                position: s.position,
+                side,
+            }
+        })
+        .collect()
+}
+
+/// The rule between bodies a and b: the deck's, or contact with default settings.
+fn pair_rule(case: &Case, materials: &[Material], a: usize, b: usize) -> PairRule {
+    let spec = case
+        .interactions
+        .iter()
+        .find(|s| s.bodies == [a, b] || s.bodies == [b, a]);
+    let (stiffness, exponent) = match spec.map(|s| s.kind) {
+        Some(InteractionKind::Welded) => return PairRule::Conserve,
+        Some(InteractionKind::Contact {
+            stiffness,
+            exponent,
+        }) => (stiffness, exponent),
+        None => (None, None),
+    };
+    let n = exponent.unwrap_or(DEFAULT_EXPONENT);
+    let k = stiffness.unwrap_or_else(|| {
+        contact::default_stiffness(expected_contact_pressure(case, materials, a, b), n)
+    });
+    PairRule::Contact(ContactParams {
+        stiffness: k,
+        exponent: n,
+        spacing: 0.5 * (case.bodies[a].spacing + case.bodies[b].spacing),
+    })
+}
+
+/// The interface pressure a contact between bodies a and b must carry: the Hugoniot impact
+/// pressure at their relative speed (or the deck's `impact_speed`), the weight of the heavier
+/// body on its footprint under gravity, and at least 10⁻⁴ of the smaller bulk modulus.
+pub fn expected_contact_pressure(case: &Case, materials: &[Material], a: usize, b: usize) -> f64 {
+    let (ba, bb) = (&case.bodies[a], &case.bodies[b]);
+    let (ma, mb) = (&materials[ba.material], &materials[bb.material]);
+    let v = case.simulation.impact_speed.unwrap_or_else(|| {
+        (0..3)
+            .map(|k| (ba.velocity[k] - bb.velocity[k]).powi(2))
+            .sum::<f64>()
+            .sqrt()
+    });
+    let hugoniot = |body: &BodySpec, m: &Material| {
+        let s1 = match case.materials[body.material].eos {
+            EosSpec::MieGruneisen { s1, .. } => s1,
+            EosSpec::Linear { .. } => 0.0,
+        };
+        (m.rho0, m.sound_speed0(), s1)
+    };
+    let impact = contact::impact_pressure(v, hugoniot(ba, ma), hugoniot(bb, mb));
+    let g = case.simulation.gravity;
+    let g_norm = (g[0] * g[0] + g[1] * g[1] + g[2] * g[2]).sqrt();
+    let weight = |body: &BodySpec, m: &Material| {
+        if g_norm == 0.0 {
+            return 0.0;
+        }
+        let (lo, hi) = shapes::bounding_box(&body.shape);
+        let extent: f64 = (0..3).map(|k| (hi[k] - lo[k]) * g[k].abs() / g_norm).sum();
+        m.rho0 * g_norm * extent
+    };
+    let floor = 1e-4 * ma.bulk_modulus0().min(mb.bulk_modulus0());
+    impact.max(weight(ba, ma)).max(weight(bb, mb)).max(floor)
+}
+
+/// No particle of one body may start closer than 0.5 Δp_avg to a particle of another.
+fn check_overlap<const D: usize>(case: &Case, p: &Particles<D>) -> Result<()> {
+    if case.bodies.len() < 2 {
+        return Ok(());
+    }
+    // With h = Δp/4 the search support h_i + h_j is exactly 0.5 Δp_avg.
+    let h: Vec<f64> = p
+        .body
+        .iter()
+        .map(|&b| 0.25 * case.bodies[b as usize].spacing)
+        .collect();
+    let mut nl = NeighborList::default();
+    nl.build(&p.x, &h, p.len());
+    for i in 0..p.len() {
+        for &j in &nl.lists[i] {
+            let j = j as usize;
+            let (bi, bj) = (p.body[i] as usize, p.body[j] as usize);
+            if bi < bj {
+                let (a, b) = (&case.bodies[bi], &case.bodies[bj]);
+                let d = (p.x[i] - p.x[j]).norm();
+                return Err(deck_error(
+                    case,
+                    b.location,
+                    &format!("body[{bj}].shape"),
+                    format!(
+                        "bodies '{}' and '{}' overlap: particles at {} and {} are {d:.3e} m apart, less than half their spacing",
+                        a.name,
+                        b.name,
+                        fmt_point(&p.x[i]),
+                        fmt_point(&p.x[j]),
+                    ),
+                    "move one body so that their facing particle layers are at least one spacing apart",
+                ));
+            }
+        }
+    }
+    Ok(())
+}
+
+fn fmt_point<const D: usize>(x: &Vector<D>) -> String {
+    let parts: Vec<String> = x.iter().map(|c| format!("{c:.4e}")).collect();
+    format!("({})", parts.join(", "))
+}
+
+fn deck_error(
+    case: &Case,
+    loc: crate::case::Location,
+    key: &str,
+    message: String,
+    help: &str,
+) -> Error {
+    Error::Deck {
+        location: DeckLocation {
+            file: case.file.clone(),
+            line: loc.line,
+            column: loc.column,
+            offset: 0,
+            length: 0,
+        },
+        key: key.to_string(),
+        message,
+        help: Some(help.to_string()),
+    }
+}

@@ -1,0 +1,142 @@
+//! Shapes filled with particles on a simple cubic (square in 2D) lattice.
+//!
+//! Lattice points sit at o + (i + ½) Δp per axis. The origin o is the shape's bounding-box
+//! minimum, except along an axis with a symmetry plane, where o is shifted (by less than Δp) to
+//! lie on the plane (the first plane on that axis), so that the first layer sits Δp/2 from it and its ghosts Δp away: the
+//! mirrored lattice continues the real one.
+
+use crate::boundary::Plane;
+use crate::case::Shape;
+use crate::particles::Vector;
+
+/// Bounding box (min, max) of a shape in 3 components (z of 2D shapes is ignored by callers).
+pub fn bounding_box(shape: &Shape) -> ([f64; 3], [f64; 3]) {
+    match *shape {
+        Shape::Box { min, max } => (min, max),
+        Shape::Sphere { center, radius }
+        | Shape::Ring {
+            center,
+            outer_radius: radius,
+            ..
+        } => (center.map(|c| c - radius), center.map(|c| c + radius)),
+        Shape::Cylinder {
+            base,
+            axis,
+            radius,
+            length,
+        } => {
+            let mut lo = [0.0; 3];
+            let mut hi = [0.0; 3];
+            for k in 0..3 {
+                let top = base[k] + axis[k] * length;
+                // Extent of the disc of radius r normal to the axis along k: r √(1 − a_k²).
+                let e = radius * (1.0 - axis[k] * axis[k]).max(0.0).sqrt();
+                lo[k] = base[k].min(top) - e;
+                hi[k] = base[k].max(top) + e;
+            }
+            (lo, hi)
+        }
+    }
+}
+
+/// Is point x (first D components meaningful) inside the shape?
+pub fn contains<const D: usize>(shape: &Shape, x: &Vector<D>) -> bool {
+    let c3 = |a: [f64; 3]| Vector::<D>::from_fn(|k, _| a[k]);
+    match *shape {
+        Shape::Box { min, max } => (0..D).all(|k| x[k] >= min[k] && x[k] <= max[k]),
+        Shape::Sphere { center, radius } => (x - c3(center)).norm() <= radius,
+        Shape::Ring {
+            center,
+            inner_radius,
+            outer_radius,
+        } => {
+            let r = (x - c3(center)).norm();
+            r >= inner_radius && r <= outer_radius
+        }
+        Shape::Cylinder {
+            base,
+            axis,
+            radius,
+            length,
+        } => {
+            let d = x - c3(base);
+            let a = c3(axis);
+            let t = d.dot(&a);
+            t >= 0.0 && t <= length && (d - a * t).norm() <= radius
+        }
+    }
+}
+
+/// Lattice points of the shape at spacing dp, on the model's side of the symmetry planes.
+pub fn lattice<const D: usize>(
+    shape: &Shape,
+    dp: f64,
+    planes: &[Plane],
+) -> Vec<Vector<D>> {
+    let (lo, hi) = bounding_box(shape);
+    let mut origin = [0.0; 3];
+    let mut count = [1usize; 3];
+    for k in 0..D {
+        origin[k] = lo[k];
+        if let Some(pl) = planes.iter().find(|p| p.axis == k) {
+            origin[k] = pl.position - ((pl.position - lo[k]) / dp).ceil() * dp;
+        }
+        // A relative tolerance keeps a box of exactly n spacings at n layers.
+        count[k] = ((hi[k] - origin[k]) / dp + 1e-9).floor().max(0.0) as usize;
+    }
+    let mut out = Vec::new();
+    let (nx, ny, nz) = (count[0], count[1], if D == 3 { count[2] } else { 1 });
+    for a in 0..nx {
+        for b in 0..ny {
+            for c in 0..nz {
+                let idx = [a, b, c];
+                let x = Vector::<D>::from_fn(|k, _| origin[k] + (idx[k] as f64 + 0.5) * dp);
+                let on_model_side = planes.iter().all(|p| p.depth(x[p.axis]) >= 0.0);
+                if on_model_side && contains(shape, &x) {
+                    out.push(x);
+                }
+            }
+        }
+    }
+    out
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn box_holds_exact_layers_and_sphere_volume() {
+        let b = Shape::Box {
+            min: [0.0, 0.0, 0.0],
+            max: [1.0, 0.5, 0.2],
+        };
+        assert_eq!(lattice::<3>(&b, 0.1, &[]).len(), 10 * 5 * 2);
+        let s = Shape::Sphere {
+            center: [0.0; 3],
+            radius: 1.0,
+        };
+        let n = lattice::<3>(&s, 0.05, &[]).len() as f64;
+        let v = n * 0.05f64.powi(3);
+        assert!((v / (4.0 / 3.0 * std::f64::consts::PI) - 1.0).abs() < 0.01, "{v}");
+        // A quarter sphere keeps a quarter of the particles, the first layer at Δp/2.
+        let planes = [
+            Plane { axis: 0, position: 0.0, side: 1.0 },
+            Plane { axis: 1, position: 0.0, side: 1.0 },
+        ];
+        let q = lattice::<3>(&s, 0.05, &planes);
+        assert_eq!(q.len() as f64, n / 4.0);
+        let xmin = q.iter().map(|x| x[0]).fold(f64::INFINITY, f64::min);
+        assert!((xmin - 0.025).abs() < 1e-12);
+    }
+
+    #[test]
+    fn disc_area_2d() {
+        let s = Shape::Sphere {
+            center: [0.3, 0.1, 0.0],
+            radius: 1.0,
+        };
+        let n = lattice::<2>(&s, 0.02, &[]).len() as f64;
+        assert!((n * 0.0004 / std::f64::consts::PI - 1.0).abs() < 0.01);
+    }
+}

@@ -1,0 +1,230 @@
+//! The time loop of one run: neighbours → physics + contact + boundary → integration, with the
+//! diagnostics of each step and the checks that stop an unstable run.
+
+use crate::boundary;
+use crate::boundary::Plane;
+use crate::case::{Case, KernelKind};
+use crate::error::{Error, Result};
+use crate::integrate;
+use crate::kernel::{CubicSpline, WendlandC2};
+use crate::neighbors::NeighborList;
+use crate::particles::{to3, Particles};
+use crate::physics::{self, Model, Rates};
+use crate::setup;
+
+/// Global quantities at t_n (the start of the step that produced them).
+#[derive(Debug, Clone, Default, PartialEq)]
+pub struct Diagnostics {
+    pub time: f64,
+    pub dt: f64,
+    /// Kinetic energy, the mean of the half-step values ½ Σ m |v^{n±½}|² (J).
+    pub kinetic: f64,
+    /// Σ m e (J).
+    pub internal: f64,
+    /// Contact potential Φ (J).
+    pub contact: f64,
+    /// Gravitational potential −Σ m g·x (J), 0 without gravity.
+    pub gravity: f64,
+    /// kinetic + internal + contact + gravity.
+    pub total: f64,
+    /// Σ m v at t_n (mean of the half-step momenta), z = 0 in 2D.
+    pub momentum: [f64; 3],
+    /// Σ m |v| (scale for the relative momentum error).
+    pub momentum_scale: f64,
+    pub max_pressure: f64,
+    /// Smallest distance between particles of different bodies in contact, / Δp_avg
+    /// (None: no such pair within the support).
+    pub min_interbody_distance: Option<f64>,
+    /// Contact force on each body (N), z = 0 in 2D.
+    pub body_contact_force: Vec<[f64; 3]>,
+    /// Neighbour entries of the real particles this step (particle-neighbour interactions).
+    pub interactions: usize,
+}
+
+/// A run in progress.
+#[derive(Debug)]
+pub struct Simulation<const D: usize> {
+    pub particles: Particles<D>,
+    pub model: Model<D>,
+    pub kernel: KernelKind,
+    pub symmetry: Vec<Plane>,
+    pub body_names: Vec<String>,
+    pub time: f64,
+    pub step: u64,
+    /// Δt of the last step (0 before the first).
+    pub dt_prev: f64,
+    /// Δt of the first step, for the collapse check.
+    pub dt_first: Option<f64>,
+    /// A particle faster than this has gone unstable (m/s).
+    pub speed_limit: f64,
+    neighbors: NeighborList,
+    rates: Rates<D>,
+}
+
+impl<const D: usize> Simulation<D> {
+    /// Set up a case (the deck's dimension must be D).
+    pub fn new(case: &Case) -> Result<Self> {
+        let (particles, model) = setup::build::<D>(case)?;
+        let n = particles.n_real;
+        let v0 = (0..n).map(|i| particles.v[i].norm()).fold(0.0, f64::max);
+        let c0 = (0..n).map(|i| particles.c[i]).fold(0.0, f64::max);
+        Ok(Simulation {
+            particles,
+            model,
+            kernel: case.simulation.kernel,
+            symmetry: setup::symmetry_planes(case),
+            body_names: case.bodies.iter().map(|b| b.name.clone()).collect(),
+            time: 0.0,
+            step: 0,
+            dt_prev: 0.0,
+            dt_first: None,
+            // DESIGN.md: 10× the fastest initial speed. Bodies starting at rest (a block on an
+            // incline) would trip that at once, so the sound speed bounds it from below.
+            speed_limit: 10.0 * v0.max(c0),
+            neighbors: NeighborList::default(),
+            rates: Rates::default(),
+        })
+    }
+
+    /// Advance one step, of at most `dt_max`. On instability the particles are left at t_n
+    /// (the last good state) and the error names the particle, its body, place and cause.
+    pub fn step(&mut self, dt_max: f64) -> Result<Diagnostics> {
+        let p = &mut self.particles;
+        integrate::predict_velocity(p, &self.model, self.dt_prev);
+        boundary::rebuild_ghosts(p, &self.symmetry);
+        self.neighbors.build(&p.x, &p.h, p.n_real);
+        match self.kernel {
+            KernelKind::CubicSpline => physics::compute_rates(
+                CubicSpline,
+                p,
+                &self.neighbors,
+                &self.model,
+                &mut self.rates,
+            ),
+            KernelKind::WendlandC2 => physics::compute_rates(
+                WendlandC2,
+                p,
+                &self.neighbors,
+                &self.model,
+                &mut self.rates,
+            ),
+        }
+        let n = p.n_real;
+        let mut dt = self.rates.dt.iter().copied().fold(f64::INFINITY, f64::min);
+        if self.dt_prev > 0.0 {
+            dt = dt.min(1.25 * self.dt_prev);
+        }
+        let dt = dt.min(dt_max);
+        let dt_first = *self.dt_first.get_or_insert(dt);
+        self.check(dt, dt_first)?;
+
+        let mut d = Diagnostics {
+            time: self.time,
+            dt,
+            body_contact_force: vec![[0.0; 3]; self.body_names.len()],
+            interactions: self.neighbors.lists[..n].iter().map(Vec::len).sum(),
+            max_pressure: f64::NEG_INFINITY,
+            ..Default::default()
+        };
+        let p = &self.particles;
+        let g = self.model.gravity;
+        let mut gap = f64::INFINITY;
+        let (mut ke_old, mut mom_old) = (0.0, [0.0; 3]);
+        for i in 0..n {
+            d.internal += p.m[i] * p.e[i];
+            d.contact += self.rates.contact_energy[i];
+            d.gravity -= p.m[i] * g.dot(&p.x[i]);
+            d.max_pressure = d.max_pressure.max(p.p[i]);
+            gap = gap.min(self.rates.min_contact_gap[i]);
+            let f = to3(&self.rates.contact_force[i]);
+            let fb = &mut d.body_contact_force[p.body[i] as usize];
+            for k in 0..3 {
+                fb[k] += f[k];
+            }
+            ke_old += 0.5 * p.m[i] * p.vh[i].norm_squared();
+            let mv = to3(&(p.vh[i] * p.m[i]));
+            for k in 0..3 {
+                mom_old[k] += mv[k];
+            }
+        }
+        d.min_interbody_distance = gap.is_finite().then_some(gap);
+
+        integrate::advance(&mut self.particles, &self.rates, &self.model, dt, self.dt_prev);
+
+        let p = &self.particles;
+        let mut ke_new = 0.0;
+        for i in 0..n {
+            ke_new += 0.5 * p.m[i] * p.vh[i].norm_squared();
+            let mv = to3(&(p.vh[i] * p.m[i]));
+            for k in 0..3 {
+                d.momentum[k] += 0.5 * (mom_old[k] + mv[k]);
+            }
+            d.momentum_scale += p.m[i] * p.vh[i].norm();
+        }
+        d.kinetic = 0.5 * (ke_old + ke_new);
+        d.total = d.kinetic + d.internal + d.contact + d.gravity;
+        self.time += dt;
+        self.step += 1;
+        self.dt_prev = dt;
+        Ok(d)
+    }
+
+    /// The rates at t_n must be finite, the density must stay positive over the step, no
+    /// particle may exceed the speed limit and the step must not collapse.
+    fn check(&self, dt: f64, dt_first: f64) -> Result<()> {
+        let p = &self.particles;
+        let r = &self.rates;
+        let bad = (0..p.n_real).find_map(|i| {
+            let cause = if !p.x[i].iter().all(|c| c.is_finite()) {
+                "position is not finite".to_string()
+            } else if !(r.acc[i].iter().all(|c| c.is_finite())
+                && r.drho[i].is_finite()
+                && r.de[i].is_finite()
+                && r.grad_v[i].iter().all(|c| c.is_finite()))
+            {
+                "acceleration or strain rate is not finite (NaN/inf)".to_string()
+            } else if !(p.rho[i] + dt * r.drho[i] > 0.0) {
+                format!(
+                    "density would fall to {:.4e} kg/m³ (from {:.4e})",
+                    p.rho[i] + dt * r.drho[i],
+                    p.rho[i]
+                )
+            } else if !(p.e[i].is_finite() && p.p[i].is_finite()) {
+                "internal energy or pressure is not finite".to_string()
+            } else if p.v[i].norm() > self.speed_limit {
+                format!(
+                    "speed {:.4e} m/s exceeds 10× the fastest initial speed or sound speed ({:.4e} m/s)",
+                    p.v[i].norm(),
+                    self.speed_limit
+                )
+            } else {
+                return None;
+            };
+            Some((i, cause))
+        });
+        let (i, cause) = match bad {
+            Some(b) => b,
+            None if !(dt >= 1e-6 * dt_first) => {
+                let i = (0..p.n_real)
+                    .min_by(|&a, &b| r.dt[a].total_cmp(&r.dt[b]))
+                    .unwrap_or(0);
+                (
+                    i,
+                    format!("time step collapsed to {dt:.4e} s, below 1e-6 of the first ({dt_first:.4e} s); this particle sets it"),
+                )
+            }
+            None => return Ok(()),
+        };
+        let pos: Vec<String> = to3(&p.x[i]).iter().map(|c| format!("{c:.6e}")).collect();
+        Err(Error::Unstable {
+            step: self.step,
+            time: self.time,
+            cause: format!(
+                "particle {} of body '{}' at ({}) m: {cause}",
+                p.id[i],
+                self.body_names[p.body[i] as usize],
+                pos.join(", ")
+            ),
+        })
+    }
+}
