@@ -114,7 +114,19 @@ fn round_up_2(x: f64) -> f64 {
         return x;
     }
     let scale = 10f64.powf(x.log10().floor() - 1.0);
-    (x / scale).ceil() * scale
+    let r = (x / scale).ceil() * scale;
+    format!("{r:.1e}").parse().unwrap_or(r)
+}
+
+/// Rounds down to one significant digit (a suggestion that reads well).
+fn round_down_1(x: f64) -> f64 {
+    if x <= 0.0 || !x.is_finite() {
+        return x;
+    }
+    let scale = 10f64.powf(x.log10().floor());
+    let r = (x / scale * (1.0 + 1e-9)).floor() * scale;
+    // Through the printed form, so that 5e-5 is not 5.000000000000001e-5.
+    format!("{r:.0e}").parse().unwrap_or(r)
 }
 
 /// A table key as it appears in a dotted path.
@@ -466,7 +478,7 @@ impl Ctx<'_> {
         let mut library_added: HashMap<&'static str, usize> = HashMap::new();
         for (i, b) in raw_bodies.iter().enumerate() {
             let prefix = format!("body[{i}]");
-            let anchor = b.span();
+            let anchor = b.anchor();
             let b = b.get_ref();
             let name = b.name.as_ref().ok_or_else(|| {
                 self.missing(
@@ -609,7 +621,7 @@ impl Ctx<'_> {
                     format!(
                         "use a spacing well below {} m (several particles across), e.g. {} m, or enlarge the shape",
                         num(smallest),
-                        num(smallest / 10.0)
+                        num(round_down_1(smallest / 10.0))
                     ),
                 ));
             }
@@ -642,8 +654,11 @@ impl Ctx<'_> {
         })
     }
 
-    fn simulation(&self, sim: &S<raw::Simulation>) -> Result<(String, usize, Simulation)> {
-        let anchor = sim.span();
+    fn simulation(
+        &self,
+        sim: &raw::Located<raw::Simulation>,
+    ) -> Result<(String, usize, Simulation)> {
+        let anchor = sim.anchor();
         let s = sim.get_ref();
         let name =
             match &s.name {
@@ -1433,7 +1448,7 @@ impl Ctx<'_> {
 
     fn check_memory(
         &self,
-        raw_bodies: &[S<raw::Body>],
+        raw_bodies: &[raw::Located<raw::Body>],
         bodies: &[BodySpec],
         dim: usize,
         memory: Option<f64>,
@@ -1461,7 +1476,7 @@ impl Ctx<'_> {
             .get_ref()
             .spacing
             .as_ref()
-            .map_or(raw_bodies[worst].span(), |s| s.span());
+            .map_or(raw_bodies[worst].anchor(), |s| s.span());
         let others = total - n_worst;
         let fit = if others < 0.9 * limit {
             let target = 0.9 * limit - others;
@@ -1494,7 +1509,7 @@ impl Ctx<'_> {
 
     fn interactions(
         &self,
-        raw: Option<&[S<raw::Interaction>]>,
+        raw: Option<&[raw::Located<raw::Interaction>]>,
         bodies: &[BodySpec],
     ) -> Result<Vec<InteractionSpec>> {
         let mut out = Vec::new();
@@ -1502,7 +1517,7 @@ impl Ctx<'_> {
         let names: Vec<&str> = bodies.iter().map(|b| b.name.as_str()).collect();
         for (i, it) in raw.unwrap_or(&[]).iter().enumerate() {
             let prefix = format!("interaction[{i}]");
-            let anchor = it.span();
+            let anchor = it.anchor();
             let r = it.get_ref();
             let Some(pair) = &r.bodies else {
                 return Err(self.missing(
@@ -1606,7 +1621,7 @@ impl Ctx<'_> {
                 }
             };
             out.push(InteractionSpec {
-                location: self.location(&anchor),
+                location: self.location(it.span.as_ref().unwrap_or(&pair.span())),
                 bodies: idx,
                 kind,
             });
@@ -1614,14 +1629,18 @@ impl Ctx<'_> {
         Ok(out)
     }
 
-    fn symmetry(&self, raw: Option<&[S<raw::Symmetry>]>, dim: usize) -> Result<Vec<SymmetryPlane>> {
+    fn symmetry(
+        &self,
+        raw: Option<&[raw::Located<raw::Symmetry>]>,
+        dim: usize,
+    ) -> Result<Vec<SymmetryPlane>> {
         let mut out: Vec<SymmetryPlane> = Vec::new();
         for (i, sy) in raw.unwrap_or(&[]).iter().enumerate() {
             let prefix = format!("symmetry[{i}]");
             let r = sy.get_ref();
             let Some(axis) = &r.axis else {
                 return Err(self.missing(
-                    &sy.span(),
+                    &sy.anchor(),
                     &format!("{prefix}.axis"),
                     "the normal axis of the symmetry plane",
                     "add e.g. `axis = \"x\"`",
@@ -1653,7 +1672,7 @@ impl Ctx<'_> {
         Ok(out)
     }
 
-    fn output(&self, raw: Option<&S<raw::Output>>, end_time: f64) -> Result<OutputSpec> {
+    fn output(&self, raw: Option<&raw::Located<raw::Output>>, end_time: f64) -> Result<OutputSpec> {
         let mut out = OutputSpec {
             snapshot_interval: None,
             history_every: 10,
@@ -1685,7 +1704,7 @@ impl Ctx<'_> {
             let prefix = format!("output.picture[{i}]");
             let r = p.get_ref();
             let Some(times) = r.times.as_ref().filter(|t| !t.get_ref().is_empty()) else {
-                let at = r.times.as_ref().map_or(p.span(), |t| t.span());
+                let at = r.times.as_ref().map_or(p.anchor(), |t| t.span());
                 return Err(self.missing(
                     &at,
                     &format!("{prefix}.times"),

@@ -2,7 +2,9 @@
 //! with its byte span. Nothing here is checked beyond TOML syntax, types and key names; `super`
 //! turns these into a [`crate::case::Case`].
 
-use serde::de::{Deserialize, Deserializer, MapAccess, Visitor};
+use std::ops::Range;
+
+use serde::de::{Deserialize, Deserializer, Error as _, IntoDeserializer, MapAccess, Visitor};
 use toml::Spanned;
 
 pub type S<T> = Spanned<T>;
@@ -32,15 +34,121 @@ impl<'de, K: Deserialize<'de>, V: Deserialize<'de>> Deserialize<'de> for Ordered
     }
 }
 
+/// A table with the span of its header (or of its inline `{ … }`) where it has one. Unlike
+/// `toml::Spanned`, it also reads tables that have no span of their own (an implicit `[output]`
+/// made by `[[output.picture]]`, a table made by dotted keys), with `span` None.
+#[derive(Debug)]
+pub struct Located<T> {
+    pub span: Option<Range<usize>>,
+    pub value: T,
+}
+
+impl<T> Located<T> {
+    /// The span, or the start of the file where there is none.
+    pub fn anchor(&self) -> Range<usize> {
+        self.span.clone().unwrap_or(0..0)
+    }
+
+    pub fn get_ref(&self) -> &T {
+        &self.value
+    }
+}
+
+// The names by which `toml` recognises a request for a span (serde_spanned's protocol).
+const SPANNED_NAME: &str = "$__serde_spanned_private_Spanned";
+const SPANNED_START: &str = "$__serde_spanned_private_start";
+const SPANNED_END: &str = "$__serde_spanned_private_end";
+const SPANNED_VALUE: &str = "$__serde_spanned_private_value";
+
+impl<'de, T: Deserialize<'de>> Deserialize<'de> for Located<T> {
+    fn deserialize<D: Deserializer<'de>>(deserializer: D) -> Result<Self, D::Error> {
+        struct V_<T>(std::marker::PhantomData<T>);
+        impl<'de, T: Deserialize<'de>> Visitor<'de> for V_<T> {
+            type Value = Located<T>;
+            fn expecting(&self, f: &mut std::fmt::Formatter) -> std::fmt::Result {
+                f.write_str("a table")
+            }
+            fn visit_map<A: MapAccess<'de>>(self, mut map: A) -> Result<Self::Value, A::Error> {
+                let Some(first) = map.next_key::<String>()? else {
+                    let empty = serde::de::value::MapDeserializer::<
+                        std::iter::Empty<(String, String)>,
+                        A::Error,
+                    >::new(std::iter::empty());
+                    return Ok(Located {
+                        span: None,
+                        value: T::deserialize(empty)?,
+                    });
+                };
+                if first == SPANNED_START {
+                    let start: usize = map.next_value()?;
+                    let mut end = start;
+                    let mut value = None;
+                    while let Some(key) = map.next_key::<String>()? {
+                        if key == SPANNED_END {
+                            end = map.next_value()?;
+                        } else if key == SPANNED_VALUE {
+                            value = Some(map.next_value()?);
+                        }
+                    }
+                    let value =
+                        value.ok_or_else(|| A::Error::custom("spanned table without value"))?;
+                    return Ok(Located {
+                        span: Some(start..end),
+                        value,
+                    });
+                }
+                let replay = Replay {
+                    first: Some(first),
+                    inner: map,
+                };
+                Ok(Located {
+                    span: None,
+                    value: T::deserialize(serde::de::value::MapAccessDeserializer::new(replay))?,
+                })
+            }
+        }
+        deserializer.deserialize_struct(
+            SPANNED_NAME,
+            &[SPANNED_START, SPANNED_END, SPANNED_VALUE],
+            V_(std::marker::PhantomData),
+        )
+    }
+}
+
+/// A map whose first key was already read.
+struct Replay<A> {
+    first: Option<String>,
+    inner: A,
+}
+
+impl<'de, A: MapAccess<'de>> MapAccess<'de> for Replay<A> {
+    type Error = A::Error;
+    fn next_key_seed<K: serde::de::DeserializeSeed<'de>>(
+        &mut self,
+        seed: K,
+    ) -> Result<Option<K::Value>, A::Error> {
+        match self.first.take() {
+            Some(key) => seed.deserialize(key.into_deserializer()).map(Some),
+            None => self.inner.next_key_seed(seed),
+        }
+    }
+    fn next_value_seed<V: serde::de::DeserializeSeed<'de>>(
+        &mut self,
+        seed: V,
+    ) -> Result<V::Value, A::Error> {
+        self.inner.next_value_seed(seed)
+    }
+}
+
 #[derive(Debug, serde::Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct Deck {
-    pub simulation: Option<S<Simulation>>,
+    pub simulation: Option<Located<Simulation>>,
     pub materials: Option<Ordered<S<String>, Material>>,
-    pub body: Option<Vec<S<Body>>>,
-    pub interaction: Option<Vec<S<Interaction>>>,
-    pub symmetry: Option<Vec<S<Symmetry>>>,
-    pub output: Option<S<Output>>,
+    pub body: Option<Vec<Located<Body>>>,
+    pub interaction: Option<Vec<Located<Interaction>>>,
+    pub symmetry: Option<Vec<Located<Symmetry>>>,
+    pub output: Option<Located<Output>>,
 }
 
 #[derive(Debug, serde::Deserialize)]
@@ -155,7 +263,7 @@ pub struct Symmetry {
 pub struct Output {
     pub snapshot_interval: Num,
     pub history_every: Option<S<i64>>,
-    pub picture: Option<Vec<S<Picture>>>,
+    pub picture: Option<Vec<Located<Picture>>>,
 }
 
 #[derive(Debug, serde::Deserialize)]

@@ -560,3 +560,94 @@ fn toml_errors_name_the_key() {
     assert_eq!(location.line, 6);
     assert!(message.contains("expected a number"), "{message}");
 }
+
+/// Tables without a header of their own: dotted keys, implicit parents, sub-table headers.
+const DECK_IMPLICIT: &str = r#"
+simulation.dimension = 2
+simulation.end_time = 1e-5
+
+[simulation.viscosity]
+alpha = 0.7
+
+[[body]]
+name = "a"
+material = "steel"
+spacing = 1e-3
+shape.type = "rectangle"
+shape.min = [0.0, 0.0]
+shape.max = [0.1, 0.1]
+
+[[body]]
+name = "b"
+material = "steel"
+spacing = 1e-3
+[body.shape]
+type = "disc"
+center = [0.3, 0.0]
+radius = 0.05
+
+[[output.picture]]
+times = [0.0]
+"#;
+
+#[test]
+fn tables_without_headers() {
+    let case = parse(DECK_IMPLICIT, "implicit.toml").unwrap();
+    assert_eq!(case.dimension, 2);
+    assert_eq!(case.simulation.viscosity_alpha, 0.7);
+    assert_eq!(case.simulation.viscosity_beta, 2.0);
+    assert_eq!(
+        case.bodies[0].shape,
+        Shape::Box {
+            min: [0.0; 3],
+            max: [0.1, 0.1, 0.0]
+        }
+    );
+    assert_eq!(
+        case.bodies[1].shape,
+        Shape::Sphere {
+            center: [0.3, 0.0, 0.0],
+            radius: 0.05
+        }
+    );
+    assert_eq!(case.materials.len(), 1);
+    assert_eq!(case.output.pictures[0].times, [0.0]);
+
+    // Inline array of tables.
+    let inline = "[simulation]\ndimension = 2\nend_time = 1.0\n\
+                  body = [{ name = \"a\", material = \"steel\", spacing = 0.1, shape = { type = \"box\", min = [0, 0], max = [1, 1] } }]\n";
+    // (`body` after [simulation] belongs to it: an unknown key there.)
+    let Err(Error::Deck { key, location, .. }) = parse(inline, "x.toml") else {
+        panic!()
+    };
+    assert_eq!((key.as_str(), location.line), ("simulation.body", 4));
+    let inline = format!("body = [{{ name = \"a\", material = \"steel\", spacing = 0.1, shape = {{ type = \"box\", min = [0, 0], max = [1, 1] }} }}]\n{}", &inline[..inline.find("body").unwrap()]);
+    let case = parse(&inline, "x.toml").unwrap();
+    assert_eq!(
+        case.bodies[0].location,
+        Location {
+            line: 1,
+            column: 18
+        }
+    );
+
+    // Errors in implicit tables still name the key and line.
+    let bad = DECK_IMPLICIT.replace("shape.max", "shape.maxx");
+    let Err(Error::Deck { key, location, .. }) = parse(&bad, "x.toml") else {
+        panic!()
+    };
+    assert_eq!((key.as_str(), location.line), ("body[0].shape.maxx", 14));
+    let bad = DECK_IMPLICIT.replace("times = [0.0]", "times = [0.0]\ncolour = \"body\"");
+    let Err(Error::Deck { key, location, .. }) = parse(&bad, "x.toml") else {
+        panic!()
+    };
+    assert_eq!(
+        (key.as_str(), location.line),
+        ("output.picture[0].colour", 27)
+    );
+    let bad = DECK_IMPLICIT.replace("simulation.dimension = 2", "simulation.dimensio = 2");
+    let Err(Error::Deck { key, location, .. }) = parse(&bad, "x.toml") else {
+        panic!()
+    };
+    assert_eq!((key.as_str(), location.line), ("simulation.dimensio", 2));
+}
