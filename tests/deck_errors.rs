@@ -336,3 +336,61 @@ fn load_reports_a_missing_file() {
     let err = strike::deck::load(std::path::Path::new("/nonexistent/deck.toml")).unwrap_err();
     assert!(matches!(err, Error::Io { .. }), "{err}");
 }
+
+#[test]
+fn linear_eos_needs_a_bulk_modulus_or_elastic_constants() {
+    let deck = edit(
+        "eos = { type = \"mie_gruneisen\", c0 = 5328.0, s1 = 1.338, gamma0 = 2.0 }",
+        "eos = { type = \"linear\" }",
+    );
+    let (message, help) = deck_error(&deck, "materials.al.eos.bulk_modulus", 7);
+    assert!(message.contains("missing `bulk_modulus`"), "{message}");
+    assert!(help.contains("youngs_modulus"), "{help}");
+    // With E and ν in the strength table, K is filled in.
+    let deck = deck.replace(
+        "shear_modulus = 28.6e9",
+        "youngs_modulus = 70e9, poissons_ratio = 0.3",
+    );
+    let case = parse(&deck, "ok.toml").unwrap();
+    assert_eq!(
+        case.materials[0].eos,
+        strike::case::EosSpec::Linear {
+            bulk_modulus: 70e9 / (3.0 * (1.0 - 0.6))
+        }
+    );
+    // ν without E.
+    deck_error(
+        &edit("shear_modulus = 28.6e9", "poissons_ratio = 0.3"),
+        "materials.al.strength.youngs_modulus",
+        8,
+    );
+}
+
+#[test]
+fn two_d_specifics() {
+    let deck = edit("dimension = 3", "dimension = 2");
+    // The 3D vectors are now the wrong length, and a sphere is not a 2D shape.
+    deck_error(&deck, "body[0].velocity", 14);
+    let deck = deck
+        .replace("velocity = [0.0, 0.0, -7000.0]\n", "")
+        .replace(
+            "type = \"sphere\", center = [0.0, 0.0, 3.2e-4]",
+            "type = \"sphere\", center = [0.0, 3.2e-4]",
+        );
+    let (_, help) = deck_error(&deck, "body[0].shape.type", 14);
+    assert!(help.contains("disc"), "{help}");
+    let deck =
+        format!("{GOOD}\n[[symmetry]]\naxis = \"z\"\n").replace("dimension = 3", "dimension = 2");
+    let deck = deck
+        .replace("velocity = [0.0, 0.0, -7000.0]\n", "")
+        .replace(
+            "type = \"sphere\", center = [0.0, 0.0, 3.2e-4]",
+            "type = \"disc\", center = [0.0, 3.2e-4]",
+        )
+        .replace(
+            "min = [-1.5e-3, -1.5e-3, -2e-4], max = [1.5e-3, 1.5e-3, 0.0]",
+            "min = [-1.5e-3, -2e-4], max = [1.5e-3, 0.0]",
+        );
+    let (message, _) = deck_error(&deck, "symmetry[0].axis", 27);
+    assert!(message.contains("2D"), "{message}");
+}

@@ -1646,6 +1646,14 @@ impl Ctx<'_> {
                     "add e.g. `axis = \"x\"`",
                 ));
             };
+            if dim == 2 && axis.get_ref() == "z" {
+                return Err(self.fail(
+                    axis.span(),
+                    format!("{prefix}.axis"),
+                    "a symmetry plane normal to z in a 2D deck",
+                    "in 2D (plane strain) the symmetry axis is `x` or `y`",
+                ));
+            }
             let name = self.choice(axis, &format!("{prefix}.axis"), &AXES[..dim], "axis")?;
             let axis_index = AXES.iter().position(|a| *a == name).unwrap_or(0);
             let position = match &r.position {
