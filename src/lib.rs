@@ -5,8 +5,13 @@
 //! Data flows one way: [`deck`] → [`setup`] → [`particles`] → each step ([`neighbors`] →
 //! [`physics`] + [`contact`] + [`boundary`] → [`integrate`]) → [`output`].
 
+// Errors carry their deck location and message by value; they are returned once per run, so
+// their size does not matter.
+#![allow(clippy::result_large_err)]
+
 pub mod boundary;
 pub mod case;
+pub mod check;
 pub mod contact;
 pub mod deck;
 pub mod error;
@@ -16,6 +21,7 @@ pub mod material;
 pub mod neighbors;
 pub mod particles;
 pub mod physics;
+pub mod run;
 pub mod setup;
 pub mod simulation;
 pub mod output;

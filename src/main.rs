@@ -1,1 +1,143 @@
-fn main() {}
+//! The `strike` command line: run, check.
+
+use clap::{Parser, Subcommand};
+use miette::{miette, LabeledSpan, NamedSource, Report};
+use std::io::IsTerminal;
+use std::path::{Path, PathBuf};
+use strike::{case::Case, check, deck, run, Error};
+
+#[derive(Parser)]
+#[command(name = "strike", version, about = "SPH for solid bodies under impact, with frictionless particle contact")]
+struct Cli {
+    #[command(subcommand)]
+    command: Command,
+}
+
+#[derive(Subcommand)]
+enum Command {
+    /// Run a case deck: snapshots, history, pictures and a summary in the output directory.
+    Run {
+        /// The case deck (TOML).
+        case: PathBuf,
+        /// Output directory (default: runs/<case name>).
+        #[arg(long)]
+        out: Option<PathBuf>,
+        /// Worker threads (default: all cores).
+        #[arg(long)]
+        threads: Option<usize>,
+        /// Stop after this many steps.
+        #[arg(long)]
+        max_steps: Option<u64>,
+    },
+    /// Read and validate a deck without running it: particles, h, first time step, memory and
+    /// run-time estimates, warnings.
+    Check {
+        /// The case deck (TOML).
+        case: PathBuf,
+    },
+}
+
+fn main() -> std::process::ExitCode {
+    tracing_subscriber::fmt()
+        .with_env_filter(
+            tracing_subscriber::EnvFilter::try_from_default_env()
+                .unwrap_or_else(|_| tracing_subscriber::EnvFilter::new("info")),
+        )
+        .with_writer(std::io::stderr)
+        .with_target(false)
+        .init();
+    match main_inner() {
+        Ok(()) => std::process::ExitCode::SUCCESS,
+        Err(report) => {
+            eprintln!("{report:?}");
+            std::process::ExitCode::FAILURE
+        }
+    }
+}
+
+fn main_inner() -> Result<(), Report> {
+    let cli = Cli::parse();
+    match cli.command {
+        Command::Run {
+            case,
+            out,
+            threads,
+            max_steps,
+        } => {
+            set_threads(threads)?;
+            let c = load(&case)?;
+            let out_dir = out.unwrap_or_else(|| Path::new("runs").join(&c.name));
+            tracing::info!(
+                "running {} ({}D) into {} on {} threads",
+                case.display(),
+                c.dimension,
+                out_dir.display(),
+                rayon::current_num_threads()
+            );
+            let opts = run::RunOptions {
+                out_dir: out_dir.clone(),
+                progress: std::io::stderr().is_terminal(),
+                max_steps,
+                write_fields: true,
+            };
+            let summary = run::run(&c, &opts).map_err(|e| report(e, &case))?;
+            println!("{}", check::summary_text(&summary));
+            println!("output in {}", out_dir.display());
+            Ok(())
+        }
+        Command::Check { case } => {
+            let c = load(&case)?;
+            let text = check::check(&c).map_err(|e| report(e, &case))?;
+            println!("{text}");
+            Ok(())
+        }
+    }
+}
+
+fn set_threads(threads: Option<usize>) -> Result<(), Report> {
+    if let Some(n) = threads {
+        if n == 0 {
+            return Err(miette!(help = "give a positive number of threads, e.g. --threads 2", "--threads must be at least 1"));
+        }
+        rayon::ThreadPoolBuilder::new()
+            .num_threads(n)
+            .build_global()
+            .map_err(|e| miette!("cannot start {n} threads: {e}"))?;
+    }
+    Ok(())
+}
+
+fn load(path: &Path) -> Result<Case, Report> {
+    deck::load(path).map_err(|e| report(e, path))
+}
+
+/// A library error as a miette report; deck errors show the offending line of the deck.
+fn report(e: Error, path: &Path) -> Report {
+    match e {
+        Error::Deck {
+            location,
+            key,
+            message,
+            help,
+        } => {
+            let header = format!("{}:{}:{}: `{key}`: {message}", location.file, location.line, location.column);
+            let source = std::fs::read_to_string(path).unwrap_or_default();
+            let mut diag = miette::MietteDiagnostic::new(header).with_code("strike::deck");
+            if let Some(h) = help {
+                diag = diag.with_help(h);
+            }
+            if location.length > 0 && location.offset + location.length <= source.len() {
+                diag = diag.with_label(LabeledSpan::at(location.offset..location.offset + location.length, key));
+            } else if location.line > 0 {
+                // Point at the start of the line named.
+                let offset: usize = source.lines().take(location.line - 1).map(|l| l.len() + 1).sum();
+                let len = source.lines().nth(location.line - 1).map_or(0, str::len);
+                if offset + len <= source.len() {
+                    diag = diag.with_label(LabeledSpan::at(offset..offset + len, key));
+                }
+            }
+            Report::new(diag).with_source_code(NamedSource::new(location.file, source))
+        }
+        other => miette!("{other}"),
+    }
+}

@@ -110,13 +110,15 @@ impl<const D: usize> Simulation<D> {
             ),
         }
         let n = p.n_real;
-        let mut dt = self.rates.dt.iter().copied().fold(f64::INFINITY, f64::min);
+        // The stable step, its growth limited to 25 % a step; the collapse check uses it before
+        // it is shortened to land on an output time.
+        let mut dt_stable = self.rates.dt.iter().copied().fold(f64::INFINITY, f64::min);
         if self.dt_prev > 0.0 {
-            dt = dt.min(1.25 * self.dt_prev);
+            dt_stable = dt_stable.min(1.25 * self.dt_prev);
         }
-        let dt = dt.min(dt_max);
-        let dt_first = *self.dt_first.get_or_insert(dt);
-        self.check(dt, dt_first)?;
+        let dt_first = *self.dt_first.get_or_insert(dt_stable);
+        let dt = dt_stable.min(dt_max);
+        self.check(dt, dt_stable, dt_first)?;
 
         let mut d = Diagnostics {
             time: self.time,
@@ -171,7 +173,7 @@ impl<const D: usize> Simulation<D> {
 
     /// The rates at t_n must be finite, the density must stay positive over the step, no
     /// particle may exceed the speed limit and the step must not collapse.
-    fn check(&self, dt: f64, dt_first: f64) -> Result<()> {
+    fn check(&self, dt: f64, dt_stable: f64, dt_first: f64) -> Result<()> {
         let p = &self.particles;
         let r = &self.rates;
         let bad = (0..p.n_real).find_map(|i| {
@@ -204,13 +206,13 @@ impl<const D: usize> Simulation<D> {
         });
         let (i, cause) = match bad {
             Some(b) => b,
-            None if !(dt >= 1e-6 * dt_first) => {
+            None if !(dt_stable >= 1e-6 * dt_first) => {
                 let i = (0..p.n_real)
                     .min_by(|&a, &b| r.dt[a].total_cmp(&r.dt[b]))
                     .unwrap_or(0);
                 (
                     i,
-                    format!("time step collapsed to {dt:.4e} s, below 1e-6 of the first ({dt_first:.4e} s); this particle sets it"),
+                    format!("time step collapsed to {dt_stable:.4e} s, below 1e-6 of the first ({dt_first:.4e} s); this particle sets it"),
                 )
             }
             None => return Ok(()),

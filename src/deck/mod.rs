@@ -8,7 +8,6 @@
 
 // `crate::Error` is large (a deck error carries location, key, message and help); boxing it is
 // the error module's call, not this one's.
-#![allow(clippy::result_large_err)]
 
 mod keypath;
 pub mod library;

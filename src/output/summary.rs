@@ -1,0 +1,47 @@
+//! `summary.json`: the closing figures of a run.
+
+use crate::error::{Error, Result};
+use serde::{Deserialize, Serialize};
+use std::path::Path;
+
+/// What a run reports when it ends.
+#[derive(Debug, Clone, Serialize, Deserialize, PartialEq)]
+pub struct Summary {
+    pub case: String,
+    pub dimension: usize,
+    /// Real particles.
+    pub particles: usize,
+    pub threads: usize,
+    pub steps: u64,
+    pub wall_seconds: f64,
+    pub particle_steps_per_second: f64,
+    /// Particle-neighbour interactions per second (each particle's neighbours once per step).
+    pub interactions_per_second: f64,
+    pub mean_neighbors: f64,
+    /// Simulated time reached (s).
+    pub end_time: f64,
+    /// Largest |E(t) − E(0)| over the run divided by the largest energy in play,
+    /// max(kinetic + |internal| + contact) (+ the largest change of gravitational energy).
+    pub energy_error: f64,
+    pub initial_energy: f64,
+    pub final_energy: f64,
+    /// Largest |P(t) − P(0)| / max(|P(0)|, Σ m|v|) over the run.
+    pub momentum_error: f64,
+    /// Smallest distance between particles of different bodies over the run, / Δp_avg
+    /// (None: bodies never came within the kernel support, or one body).
+    pub min_interbody_distance: Option<f64>,
+    /// "completed", or the reason the run stopped.
+    pub status: String,
+}
+
+impl Summary {
+    pub fn write(&self, path: &Path) -> Result<()> {
+        let text = serde_json::to_string_pretty(self).map_err(|e| Error::Invalid(e.to_string()))?;
+        std::fs::write(path, text + "\n").map_err(|e| Error::io(path, e))
+    }
+
+    pub fn read(path: &Path) -> Result<Self> {
+        let text = std::fs::read_to_string(path).map_err(|e| Error::io(path, e))?;
+        serde_json::from_str(&text).map_err(|e| Error::Invalid(format!("{}: {e}", path.display())))
+    }
+}
