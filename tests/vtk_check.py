@@ -2,12 +2,15 @@
 """Check strike's VTK output with VTK's own XML reader.
 
     vtk_check.py FILE.vtp|FILE.pvd [--points N] [--fields a,b,c] [--time T]
+    vtk_check.py --png FILE.png [--size WxH] [--min-colours K]
 
 A .vtp is opened with vtkXMLPolyDataReader. A .pvd is parsed as XML; every referenced .vtp must
 exist (relative to the .pvd's folder) and is checked the same way. Checks: the reader reports no
 error, the point count (if --points), every named point-data array exists with one tuple per
 point, all point-data and point values are finite, each point has one vertex cell, and the
-FieldData TIME exists. Prints "ok ..." and exits 0, or prints the problem and exits 1.
+FieldData TIME exists. With --png, the picture is read with vtkPNGReader and its size and
+number of distinct colours are checked (a picture of one colour is an error). Prints "ok ..."
+and exits 0, or prints the problem and exits 1.
 """
 import argparse
 import math
@@ -110,12 +113,40 @@ def check_pvd(path, points, fields):
     return len(sets)
 
 
+def check_png(path, size, min_colours):
+    import vtk
+    from vtk.util.numpy_support import vtk_to_numpy
+    import numpy as np
+
+    if not os.path.isfile(path):
+        raise CheckError(f"{path}: no such file")
+    reader = vtk.vtkPNGReader()
+    if not reader.CanReadFile(path):
+        raise CheckError(f"{path}: not a PNG vtkPNGReader can read")
+    reader.SetFileName(path)
+    reader.Update()
+    img = reader.GetOutput()
+    w, h, _ = img.GetDimensions()
+    if size is not None and (w, h) != size:
+        raise CheckError(f"{path}: {w}x{h} pixels, expected {size[0]}x{size[1]}")
+    px = vtk_to_numpy(img.GetPointData().GetScalars())
+    px = px.reshape(w * h, -1)[:, :3]
+    colours = len(np.unique(px, axis=0))
+    if colours < min_colours:
+        raise CheckError(f"{path}: {colours} distinct colours, expected at least {min_colours}")
+    non_white = float(np.mean(np.any(px < 250, axis=1)))
+    return w, h, colours, non_white
+
+
 def main():
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("file")
     ap.add_argument("--points", type=int, default=None)
     ap.add_argument("--fields", default="")
     ap.add_argument("--time", type=float, default=None)
+    ap.add_argument("--png", action="store_true", help="FILE is a PNG picture")
+    ap.add_argument("--size", default=None, help="expected WxH of a PNG")
+    ap.add_argument("--min-colours", type=int, default=2)
     args = ap.parse_args()
     fields = [f for f in args.fields.split(",") if f]
     try:
@@ -124,7 +155,14 @@ def main():
         print("vtk_check: python package `vtk` missing; run .ci/setup_python.sh", file=sys.stderr)
         return 2
     try:
-        if args.file.endswith(".pvd"):
+        if args.png:
+            size = None
+            if args.size:
+                w, h = args.size.lower().split("x")
+                size = (int(w), int(h))
+            w, h, k, nw = check_png(args.file, size, args.min_colours)
+            print(f"ok {args.file}: {w}x{h}, {k} colours, {nw:.3f} non-white")
+        elif args.file.endswith(".pvd"):
             k = check_pvd(args.file, args.points, fields)
             print(f"ok {args.file}: {k} snapshots, points {args.points}, fields {','.join(fields)}")
         else:

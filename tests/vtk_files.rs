@@ -5,6 +5,8 @@
 use std::path::{Path, PathBuf};
 use std::process::Command;
 
+use strike::case::{ColorBy, PictureSpec};
+use strike::output::picture::{self, SectionFrame};
 use strike::output::vtk::{self, PvdWriter};
 use strike::particles::{Particles, Tensor, Vector};
 
@@ -201,4 +203,221 @@ fn write_to_missing_folder_is_an_error() {
     assert!(matches!(err, strike::Error::Io { .. }), "{err}");
     let mut pvd = PvdWriter::new(&dir.join("no/such/dir/a.pvd"));
     assert!(pvd.add(0.0, "a.vtp").is_err());
+}
+
+// ---------------------------------------------------------------------------------------------
+// Pictures.
+
+/// Width and height from a PNG's IHDR chunk.
+fn png_size(path: &Path) -> (u32, u32) {
+    let b = std::fs::read(path).unwrap();
+    assert_eq!(
+        &b[..8],
+        b"\x89PNG\r\n\x1a\n",
+        "{} is not a PNG",
+        path.display()
+    );
+    assert_eq!(&b[12..16], b"IHDR");
+    let w = u32::from_be_bytes(b[16..20].try_into().unwrap());
+    let h = u32::from_be_bytes(b[20..24].try_into().unwrap());
+    (w, h)
+}
+
+/// Size from the header, then VTK's PNG reader: the same size and at least `min_colours`
+/// distinct colours.
+fn check_png(path: &Path, size: (u32, u32), min_colours: usize) {
+    assert_eq!(png_size(path), size, "{}", path.display());
+    let script = Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/vtk_check.py");
+    let out = Command::new(python())
+        .arg(&script)
+        .arg("--png")
+        .arg(path)
+        .args(["--size", &format!("{}x{}", size.0, size.1)])
+        .args(["--min-colours", &min_colours.to_string()])
+        .output()
+        .expect("run vtk_check.py");
+    assert!(
+        out.status.success(),
+        "{}: {}{}",
+        path.display(),
+        String::from_utf8_lossy(&out.stdout),
+        String::from_utf8_lossy(&out.stderr)
+    );
+}
+
+/// A plane-strain projectile (disc, body 1) on a plate (body 0), ~10k particles at 0.2 mm,
+/// at time `t` with a made-up crater, speed and pressure.
+fn impact_2d(t: f64) -> Particles<2> {
+    let dx = 0.2e-3;
+    let mut p = Particles::<2>::default();
+    let depth = 2.0e-3 * (t / 10e-6);
+    for i in 0..200 {
+        for j in 0..40 {
+            let x = -20e-3 + (i as f64 + 0.5) * dx;
+            let y0 = -(j as f64 + 0.5) * dx;
+            let bowl = depth * (-(x / 4e-3).powi(2)).exp() * (1.0 + y0 / 10e-3);
+            p.push(
+                Vector::<2>::new(x, y0 - bowl),
+                Vector::<2>::zeros(),
+                1e-4,
+                7850.0,
+                1.2 * dx,
+                0,
+            );
+        }
+    }
+    let r = 5e-3;
+    let yc = r + 1e-3 - 800.0 * t;
+    let n = (r / dx).ceil() as i32;
+    for i in -n..=n {
+        for j in -n..=n {
+            let (x, y) = (i as f64 * dx, j as f64 * dx);
+            if x * x + y * y <= r * r {
+                let squash = 1.0 - 0.15 * (t / 10e-6) * (1.0 - (y + r) / (2.0 * r));
+                let v = Vector::<2>::new(0.0, -800.0);
+                p.push(
+                    Vector::<2>::new(x / squash, yc + y * squash),
+                    v,
+                    1e-4,
+                    2700.0,
+                    1.2 * dx,
+                    1,
+                );
+            }
+        }
+    }
+    let contact = Vector::<2>::new(0.0, -depth);
+    for k in 0..p.n_real {
+        let d = (p.x[k] - contact).norm();
+        p.p[k] = 4.0e9 * (t / 10e-6) * (-(d / 3e-3).powi(2)).exp() - 2.0e8 * (t / 10e-6);
+        p.v[k] *= 1.0 - d / 0.04;
+    }
+    p
+}
+
+fn spec(color_by: ColorBy, normal_axis: usize, position: f64) -> PictureSpec {
+    PictureSpec {
+        times: vec![0.0, 5e-6, 10e-6],
+        normal_axis,
+        position,
+        thickness: None,
+        color_by,
+    }
+}
+
+#[test]
+fn section_pictures_2d() {
+    let dir = out_dir("pictures_2d");
+    let names = vec!["target plate".to_string(), "projectile".to_string()];
+    for (color_by, file) in [
+        (ColorBy::Body, "bodies.png"),
+        (ColorBy::Pressure, "pressure.png"),
+        (ColorBy::Velocity, "speed.png"),
+    ] {
+        let frames: Vec<SectionFrame> = [0.0, 5e-6, 10e-6]
+            .iter()
+            .map(|&t| picture::extract_section(&impact_2d(t), t, &spec(color_by, 2, 0.0), 0.2e-3))
+            .collect();
+        assert!(frames[0].points.len() > 9000);
+        let path = dir.join(file);
+        picture::draw_sections(&path, &frames, color_by, &names, ["x", "y"]).unwrap();
+        let size = picture::section_image_size(&frames);
+        check_png(&path, size, if color_by == ColorBy::Body { 4 } else { 30 });
+    }
+}
+
+#[test]
+fn section_picture_3d_and_size() {
+    let dir = out_dir("pictures_3d");
+    // A 20 × 20 × 20 block of 0.5 mm spacing, pressure rising with z.
+    let mut p = Particles::<3>::default();
+    for k in 0..8000 {
+        let (i, j, l) = (k % 20, (k / 20) % 20, k / 400);
+        let x = Vector::<3>::new(i as f64, j as f64, l as f64) * 0.5e-3;
+        p.push(
+            x,
+            Vector::<3>::zeros(),
+            1e-6,
+            7850.0,
+            0.6e-3,
+            (l / 10) as u32,
+        );
+        p.p[k] = 1.0e6 * l as f64;
+    }
+    let s = spec(ColorBy::Pressure, 1, 5.0e-3);
+    let frame = picture::extract_section(&p, 2e-6, &s, 0.5e-3);
+    assert_eq!(frame.points.len(), 400, "one layer of the block");
+    assert!(frame
+        .points
+        .iter()
+        .all(|q| q[0] <= 9.5e-3 && q[1] <= 9.5e-3));
+    let frames = vec![frame];
+    let path = dir.join("pressure.png");
+    picture::draw_sections(&path, &frames, ColorBy::Pressure, &[], ["x", "z"]).unwrap();
+    // Square section: the largest square plot area (440 px) + 66 px labels + 2 × 12 px margins,
+    // + 230 px legend column; height 36 caption + 440 + 52 labels + 2 × 12.
+    assert_eq!(
+        picture::section_image_size(&frames),
+        (440 + 66 + 24 + 230, 36 + 440 + 52 + 24)
+    );
+    check_png(&path, (760, 552), 20);
+
+    let path = dir.join("bodies.png");
+    picture::draw_sections(&path, &frames, ColorBy::Body, &["lower".into()], ["x", "z"]).unwrap();
+    check_png(&path, (760, 552), 3);
+}
+
+#[test]
+fn history_picture() {
+    let dir = out_dir("history");
+    let n = 400;
+    let time: Vec<f64> = (0..n).map(|k| k as f64 * 5e-8).collect();
+    let ke: Vec<f64> = time.iter().map(|t| 1000.0 * (-t / 8e-6).exp()).collect();
+    let ie: Vec<f64> = ke.iter().map(|k| 0.8 * (1000.0 - k)).collect();
+    let ce: Vec<f64> = time
+        .iter()
+        .map(|t| 150.0 * (t / 4e-6) * (-t / 4e-6).exp())
+        .collect();
+    let total: Vec<f64> = (0..n).map(|k| ke[k] + ie[k] + ce[k]).collect();
+    let mut force: Vec<f64> = time
+        .iter()
+        .map(|t| 2.5e5 * (t / 3e-6).powi(2) * (-t / 3e-6).exp())
+        .collect();
+    force[200] = f64::NAN; // breaks the line, not the picture
+    let panels = vec![
+        (
+            "energy (J)",
+            vec![
+                ("kinetic", ke),
+                ("internal", ie),
+                ("contact", ce),
+                ("total", total),
+            ],
+        ),
+        ("contact force (N)", vec![("|F| on projectile", force)]),
+    ];
+    let path = dir.join("history.png");
+    picture::plot_history(&path, &time, &panels).unwrap();
+    assert_eq!(picture::history_image_size(2), (960, 640));
+    check_png(&path, (960, 640), 6);
+}
+
+#[test]
+fn picture_errors() {
+    let dir = out_dir("pictures_err");
+    let err = picture::draw_sections(&dir.join("a.png"), &[], ColorBy::Body, &[], ["x", "y"]);
+    assert!(err.is_err());
+    let frame = SectionFrame {
+        time: 0.0,
+        points: vec![[0.0, 0.0]],
+        values: vec![],
+        bodies: vec![0],
+    };
+    assert!(
+        picture::draw_sections(&dir.join("b.png"), &[frame], ColorBy::Body, &[], ["x", "y"])
+            .is_err()
+    );
+    let bad = dir.join("no/such/dir/c.png");
+    let err = picture::plot_history(&bad, &[0.0, 1.0], &[("y", vec![("a", vec![1.0, 2.0])])]);
+    assert!(matches!(err, Err(strike::Error::Io { .. })), "{err:?}");
 }
