@@ -50,6 +50,7 @@ fn mirror<const D: usize>(p: &mut Particles<D>, g: usize, k: usize, c: f64) {
     p.v[g][k] = -p.v[g][k];
     p.vh[g][k] = -p.vh[g][k];
     p.a[g][k] = -p.a[g][k];
+    p.u[g][k] = -p.u[g][k];
     p.contact_force[g][k] = -p.contact_force[g][k];
     for l in 0..D {
         if l != k {
@@ -67,11 +68,26 @@ mod tests {
     #[test]
     fn quarter_model_corner_gets_three_ghosts() {
         let mut p = Particles::<3>::default();
-        p.push(Vector::<3>::new(0.1, 0.2, 5.0), Vector::<3>::new(1.0, 2.0, 3.0), 1.0, 1.0, 0.5, 0);
+        p.push(
+            Vector::<3>::new(0.1, 0.2, 5.0),
+            Vector::<3>::new(1.0, 2.0, 3.0),
+            1.0,
+            1.0,
+            0.5,
+            0,
+        );
         p.s[0] = Tensor::<3>::new(1.0, 2.0, 3.0, 2.0, 4.0, 5.0, 3.0, 5.0, -5.0);
         let planes = [
-            Plane { axis: 0, position: 0.0, side: 1.0 },
-            Plane { axis: 1, position: 0.0, side: 1.0 },
+            Plane {
+                axis: 0,
+                position: 0.0,
+                side: 1.0,
+            },
+            Plane {
+                axis: 1,
+                position: 0.0,
+                side: 1.0,
+            },
         ];
         rebuild_ghosts(&mut p, &planes);
         assert_eq!(p.len(), 4);
@@ -79,7 +95,10 @@ mod tests {
         // The diagonal ghost: both x and y mirrored; S_xy keeps its sign, S_xz and S_yz flip.
         assert_eq!(p.x[3], Vector::<3>::new(-0.1, -0.2, 5.0));
         assert_eq!(p.v[3], Vector::<3>::new(-1.0, -2.0, 3.0));
-        assert_eq!(p.s[3], Tensor::<3>::new(1.0, 2.0, -3.0, 2.0, 4.0, -5.0, -3.0, -5.0, -5.0));
+        assert_eq!(
+            p.s[3],
+            Tensor::<3>::new(1.0, 2.0, -3.0, 2.0, 4.0, -5.0, -3.0, -5.0, -5.0)
+        );
         // Rebuilding replaces the ghosts, it does not add to them.
         rebuild_ghosts(&mut p, &planes);
         assert_eq!(p.len(), 4);

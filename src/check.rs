@@ -27,7 +27,14 @@ fn check_dim<const D: usize>(case: &Case) -> Result<String> {
     let n = p.n_real;
     let mut s = String::new();
     let w = &mut s;
-    let _ = writeln!(w, "case '{}' ({}, {}D{})", case.name, case.file, D, if D == 2 { ", plane strain" } else { "" });
+    let _ = writeln!(
+        w,
+        "case '{}' ({}, {}D{})",
+        case.name,
+        case.file,
+        D,
+        if D == 2 { ", plane strain" } else { "" }
+    );
     let _ = writeln!(w, "bodies:");
     let mut warnings = Vec::new();
     for (b, body) in case.bodies.iter().enumerate() {
@@ -60,7 +67,13 @@ fn check_dim<const D: usize>(case: &Case) -> Result<String> {
                     PairRule::Contact(c) => {
                         let explicit = case.interactions.iter().any(|i| {
                             (i.bodies == [a, b] || i.bodies == [b, a])
-                                && matches!(i.kind, crate::case::InteractionKind::Contact { stiffness: Some(_), .. })
+                                && matches!(
+                                    i.kind,
+                                    crate::case::InteractionKind::Contact {
+                                        stiffness: Some(_),
+                                        ..
+                                    }
+                                )
                         });
                         let _ = writeln!(
                             w,
@@ -90,19 +103,38 @@ fn check_dim<const D: usize>(case: &Case) -> Result<String> {
         }
     }
     if case.output.snapshot_interval.is_none() {
-        warnings.push("no [output] snapshot_interval: only the first and last snapshots are written".into());
+        warnings.push(
+            "no [output] snapshot_interval: only the first and last snapshots are written".into(),
+        );
     }
     let d = sim.step(f64::INFINITY)?;
     let steps = (case.simulation.end_time / d.dt).ceil();
     let bytes = n as f64 * estimated_bytes_per_particle(D) as f64;
     let cores = std::thread::available_parallelism().map_or(1, |c| c.get()) as f64;
     let seconds = steps * n as f64 / (PLANNING_PARTICLE_STEPS_PER_CORE * cores);
-    let _ = writeln!(w, "particles: {n}   mean neighbours: {:.1}", d.interactions as f64 / n as f64);
-    let _ = writeln!(w, "first time step: {:.4e} s  → about {:.0} steps to {:.4e} s (contact may shorten it)", d.dt, steps, case.simulation.end_time);
+    let _ = writeln!(
+        w,
+        "particles: {n}   mean neighbours: {:.1}",
+        d.interactions as f64 / n as f64
+    );
+    let _ = writeln!(
+        w,
+        "first time step: {:.4e} s  → about {:.0} steps to {:.4e} s (contact may shorten it)",
+        d.dt, steps, case.simulation.end_time
+    );
     let _ = writeln!(w, "estimated memory: {:.1} MB", bytes / 1e6);
-    let _ = writeln!(w, "estimated run time: {} on {} cores (planning figure {:.0e} particle-steps/s per core)", human_seconds(seconds), cores, PLANNING_PARTICLE_STEPS_PER_CORE);
+    let _ = writeln!(
+        w,
+        "estimated run time: {} on {} cores (planning figure {:.0e} particle-steps/s per core)",
+        human_seconds(seconds),
+        cores,
+        PLANNING_PARTICLE_STEPS_PER_CORE
+    );
     if let Some(g) = d.min_interbody_distance {
-        let _ = writeln!(w, "bodies start within contact range: closest pair at {g:.3} Δp_avg");
+        let _ = writeln!(
+            w,
+            "bodies start within contact range: closest pair at {g:.3} Δp_avg"
+        );
     }
     if warnings.is_empty() {
         let _ = writeln!(w, "no warnings");

@@ -65,9 +65,8 @@ pub fn pair<const D: usize, K: Kernel>(
     // d²Φ/dr² = scale n [ (n−1) f^(n−2) (dW/dr)² / W0 + f^(n−1) d²W/dr² ]; its magnitude bounds
     // the pair's spring constant for the time step.
     let f_nm2 = if f > 0.0 { f_nm1 / f } else { 0.0 };
-    let stiffness = scale
-        * n
-        * ((n - 1.0) * f_nm2 * dw * dw / w0 + f_nm1 * kernel.d2w::<D>(r, h).abs());
+    let stiffness =
+        scale * n * ((n - 1.0) * f_nm2 * dw * dw / w0 + f_nm1 * kernel.d2w::<D>(r, h).abs());
     (coef, potential, stiffness)
 }
 
@@ -126,9 +125,17 @@ mod tests {
     fn impact_pressure_limits() {
         let al = (2785.0, 5328.0, 1.338);
         // Acoustic limit: ρ c v/2 for like materials.
-        assert_relative_eq!(impact_pressure(1.0, al, al), 2785.0 * 5328.0 * 0.5, max_relative = 1e-3);
+        assert_relative_eq!(
+            impact_pressure(1.0, al, al),
+            2785.0 * 5328.0 * 0.5,
+            max_relative = 1e-3
+        );
         // Symmetric strong impact: u_p = v/2, p = ρ (c + s v/2) v/2 ≈ 83.6 GPa at 7 km/s.
         let p = impact_pressure(7000.0, al, al);
-        assert_relative_eq!(p, 2785.0 * (5328.0 + 1.338 * 3500.0) * 3500.0, max_relative = 1e-9);
+        assert_relative_eq!(
+            p,
+            2785.0 * (5328.0 + 1.338 * 3500.0) * 3500.0,
+            max_relative = 1e-9
+        );
     }
 }

@@ -35,11 +35,7 @@ pub enum Error {
     },
     /// The run went unstable.
     #[error("run stopped at step {step}, t = {time:.6e} s: {cause}")]
-    Unstable {
-        step: u64,
-        time: f64,
-        cause: String,
-    },
+    Unstable { step: u64, time: f64, cause: String },
     /// Anything else that is the user's to fix (bad command-line value, …).
     #[error("{0}")]
     Invalid(String),

@@ -1,14 +1,29 @@
 //! Central-difference (leapfrog) time integration.
 //!
-//! Velocities live at half steps, positions and the material state at whole steps:
+//! Velocities and the specific internal energy live at half steps, positions and the rest of
+//! the material state at whole steps:
 //!
-//!   v^{n+½} = v^{n−½} + ½ (Δt_{n−1} + Δt_n) a^n,    x^{n+1} = x^n + Δt_n v^{n+½},
-//!   ρ^{n+1} = ρ^n + Δt_n ρ̇^n,   e^{n+1} = e^n + Δt_n ė^n,   S^{n+1} = return(S^n + Δt_n Ṡ^n).
+//!   v^{n+½} = v^{n−½} + k_n a^n,   e^{n+½} = e^{n−½} + k_n ė^n,   k_n = ½ (Δt_{n−1} + Δt_n),
+//!   x^{n+1} = x^n + Δt_n v^{n+½},  ρ^{n+1} = ρ^n + Δt_n ρ̇^n,  S^{n+1} = return(S^n + Δt_n Ṡ^n).
+//!
+//! Kicking e with the same weight k_n as v makes the kinetic and internal energies exchange
+//! exactly the same work each step (a left-point e^{n+1} = e^n + Δt ė^n gains half a step of
+//! stress power that the kinetic energy never lost: 2–3 % at an impulsive start). The EOS uses
+//! e predicted to the whole step, e^{n+1} = e^{n+½} + ½ Δt_n ė^n.
 //!
 //! The rates at t_n (forces, contact, strain rate) are evaluated in one pass with the velocity
 //! predicted to the whole step, v^n = v^{n−½} + ½ Δt_{n−1} a^{n−1} (the predictor of LAMMPS'
 //! SMD and of Monaghan's leapfrog), so a step costs one neighbour pass. The stress rate is the
 //! Jaumann rate dS/dt = 2G (D − ⅓ tr D I) + Ω S − S Ω with D = sym L, Ω = skew L.
+//!
+//! **Lagged energy correction.** The leapfrog changes the kinetic energy by the work of the
+//! forces at the time-centred velocity v̄^n = ½ (v^{n−½} + v^{n+½}), but the energy equation
+//! used the predicted v^n. The two differ at first order where accelerations jump (an impact
+//! starting with a velocity discontinuity lost 5 % of its energy this way at C_cfl = 0.3). The
+//! energy rate is linear in the velocities, de_i = −½ Σ m_j v_ij·(T_ij ∇W), so each step stores
+//! u = (v̄ − v_pred) k_n and the next pass adds −½ Σ m_j (u_i − u_j)·(T_ij ∇W) to e: internal
+//! and kinetic energy then exchange the same work to second order, at the cost of one dot
+//! product per pair and no extra neighbour pass.
 
 use crate::material::radial_return;
 use crate::particles::{Particles, Tensor, Vector};
@@ -49,6 +64,7 @@ pub fn advance<const D: usize>(
     let kick = 0.5 * (dt_prev + dt);
     let body = &p.body[..n];
     let h0 = &p.h0[..n];
+    let v_pred = &p.v[..n];
     let m_body = &model.body_prescribed;
     let inv_d = 1.0 / D as f64;
 
@@ -64,11 +80,14 @@ pub fn advance<const D: usize>(
         .zip(p.p[..n].par_iter_mut())
         .zip(p.c[..n].par_iter_mut())
         .zip(p.contact_force[..n].par_iter_mut())
+        .zip(p.u[..n].par_iter_mut())
+        .zip(p.eh[..n].par_iter_mut())
         .enumerate()
         .for_each(
-            |(i, ((((((((((vh, a), x), rho), e), s), eps_p), h), pr), c), fc))| {
+            |(i, ((((((((((((vh, a), x), rho), e), s), eps_p), h), pr), c), fc), u), eh))| {
                 let b = body[i] as usize;
                 let mat = model.material_of(body[i]);
+                let v_old = *vh;
                 match m_body[b] {
                     Some(v0) => {
                         *a = Vector::<D>::zeros();
@@ -79,9 +98,11 @@ pub fn advance<const D: usize>(
                         *vh += *a * kick;
                     }
                 }
+                *u = ((v_old + *vh) * 0.5 - v_pred[i]) * kick;
                 *x += *vh * dt;
                 *rho += rates.drho[i] * dt;
-                *e += rates.de[i] * dt;
+                *eh += rates.de[i] * kick + rates.de_lag[i];
+                *e = *eh + rates.de[i] * (0.5 * dt);
                 let g = mat.strength.shear_modulus();
                 if g > 0.0 {
                     let trial = *s + jaumann_rate(s, &rates.grad_v[i], g) * dt;

@@ -19,12 +19,12 @@ pub mod integrate;
 pub mod kernel;
 pub mod material;
 pub mod neighbors;
+pub mod output;
 pub mod particles;
 pub mod physics;
 pub mod run;
 pub mod setup;
 pub mod simulation;
-pub mod output;
 pub mod tensor;
 
 pub use error::{Error, Result};

@@ -7,7 +7,11 @@ use std::path::{Path, PathBuf};
 use strike::{case::Case, check, deck, run, Error};
 
 #[derive(Parser)]
-#[command(name = "strike", version, about = "SPH for solid bodies under impact, with frictionless particle contact")]
+#[command(
+    name = "strike",
+    version,
+    about = "SPH for solid bodies under impact, with frictionless particle contact"
+)]
 struct Cli {
     #[command(subcommand)]
     command: Command,
@@ -97,7 +101,10 @@ fn main_inner() -> Result<(), Report> {
 fn set_threads(threads: Option<usize>) -> Result<(), Report> {
     if let Some(n) = threads {
         if n == 0 {
-            return Err(miette!(help = "give a positive number of threads, e.g. --threads 2", "--threads must be at least 1"));
+            return Err(miette!(
+                help = "give a positive number of threads, e.g. --threads 2",
+                "--threads must be at least 1"
+            ));
         }
         rayon::ThreadPoolBuilder::new()
             .num_threads(n)
@@ -120,17 +127,27 @@ fn report(e: Error, path: &Path) -> Report {
             message,
             help,
         } => {
-            let header = format!("{}:{}:{}: `{key}`: {message}", location.file, location.line, location.column);
+            let header = format!(
+                "{}:{}:{}: `{key}`: {message}",
+                location.file, location.line, location.column
+            );
             let source = std::fs::read_to_string(path).unwrap_or_default();
             let mut diag = miette::MietteDiagnostic::new(header).with_code("strike::deck");
             if let Some(h) = help {
                 diag = diag.with_help(h);
             }
             if location.length > 0 && location.offset + location.length <= source.len() {
-                diag = diag.with_label(LabeledSpan::at(location.offset..location.offset + location.length, key));
+                diag = diag.with_label(LabeledSpan::at(
+                    location.offset..location.offset + location.length,
+                    key,
+                ));
             } else if location.line > 0 {
                 // Point at the start of the line named.
-                let offset: usize = source.lines().take(location.line - 1).map(|l| l.len() + 1).sum();
+                let offset: usize = source
+                    .lines()
+                    .take(location.line - 1)
+                    .map(|l| l.len() + 1)
+                    .sum();
                 let len = source.lines().nth(location.line - 1).map_or(0, str::len);
                 if offset + len <= source.len() {
                     diag = diag.with_label(LabeledSpan::at(offset..offset + len, key));

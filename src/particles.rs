@@ -22,12 +22,18 @@ pub struct Particles<const D: usize> {
     pub vh: Vec<Vector<D>>,
     /// Acceleration of the last step (m/s²), for the velocity predictor.
     pub a: Vec<Vector<D>>,
+    /// Energy-correction displacement u = (v̄ − v_pred) Δt of the last step (m), v̄ the mean of
+    /// the half-step velocities: see `integrate` (lagged energy correction).
+    pub u: Vec<Vector<D>>,
     /// Mass m (kg).
     pub m: Vec<f64>,
     /// Density ρ (kg/m³).
     pub rho: Vec<f64>,
-    /// Specific internal energy e (J/kg).
+    /// Specific internal energy e (J/kg) at the whole step t_n (predicted; what the EOS and the
+    /// output use).
     pub e: Vec<f64>,
+    /// Leapfrog specific internal energy at the half step t_{n−½} (J/kg).
+    pub eh: Vec<f64>,
     /// Pressure p (Pa), from the EOS.
     pub p: Vec<f64>,
     /// Sound speed c = √((K_s + 4G/3)/ρ) (m/s).
@@ -78,9 +84,11 @@ impl<const D: usize> Particles<D> {
         self.v.push(v);
         self.vh.push(v);
         self.a.push(Vector::<D>::zeros());
+        self.u.push(Vector::<D>::zeros());
         self.m.push(m);
         self.rho.push(rho);
         self.e.push(0.0);
+        self.eh.push(0.0);
         self.p.push(0.0);
         self.c.push(0.0);
         self.s.push(Tensor::<D>::zeros());
@@ -100,9 +108,11 @@ impl<const D: usize> Particles<D> {
         self.v.truncate(n);
         self.vh.truncate(n);
         self.a.truncate(n);
+        self.u.truncate(n);
         self.m.truncate(n);
         self.rho.truncate(n);
         self.e.truncate(n);
+        self.eh.truncate(n);
         self.p.truncate(n);
         self.c.truncate(n);
         self.s.truncate(n);
@@ -120,9 +130,11 @@ impl<const D: usize> Particles<D> {
         self.v.push(self.v[i]);
         self.vh.push(self.vh[i]);
         self.a.push(self.a[i]);
+        self.u.push(self.u[i]);
         self.m.push(self.m[i]);
         self.rho.push(self.rho[i]);
         self.e.push(self.e[i]);
+        self.eh.push(self.eh[i]);
         self.p.push(self.p[i]);
         self.c.push(self.c[i]);
         self.s.push(self.s[i]);
@@ -146,9 +158,11 @@ impl<const D: usize> Particles<D> {
         apply(&mut self.v, order);
         apply(&mut self.vh, order);
         apply(&mut self.a, order);
+        apply(&mut self.u, order);
         apply(&mut self.m, order);
         apply(&mut self.rho, order);
         apply(&mut self.e, order);
+        apply(&mut self.eh, order);
         apply(&mut self.p, order);
         apply(&mut self.c, order);
         apply(&mut self.s, order);

@@ -57,11 +57,14 @@ impl Tally {
             self.gravity0 = d.gravity;
             self.momentum_scale = d.momentum_scale;
         }
-        self.energy_scale = self.energy_scale.max(
-            d.kinetic + d.internal.abs() + d.contact + (d.gravity - self.gravity0).abs(),
-        );
+        self.energy_scale = self
+            .energy_scale
+            .max(d.kinetic + d.internal.abs() + d.contact + (d.gravity - self.gravity0).abs());
         self.energy_dev = self.energy_dev.max((d.total - e0).abs());
-        let dp: f64 = (0..3).map(|k| (d.momentum[k] - self.p0[k]).powi(2)).sum::<f64>().sqrt();
+        let dp: f64 = (0..3)
+            .map(|k| (d.momentum[k] - self.p0[k]).powi(2))
+            .sum::<f64>()
+            .sqrt();
         self.momentum_dev = self.momentum_dev.max(dp);
         if let Some(g) = d.min_interbody_distance {
             self.min_gap = Some(self.min_gap.map_or(g, |m: f64| m.min(g)));
@@ -123,7 +126,12 @@ fn run_dim<const D: usize>(case: &Case, opts: &RunOptions) -> Result<Summary> {
                 break;
             }
             let spec = &case.output.pictures[k];
-            frames[k].push(picture::extract_section(&sim.particles, sim.time, spec, thickness(spec)));
+            frames[k].push(picture::extract_section(
+                &sim.particles,
+                sim.time,
+                spec,
+                thickness(spec),
+            ));
             pending.remove(0);
         }
     };
@@ -256,7 +264,13 @@ fn write_pictures(
         let field = color_name(spec.color_by);
         for f in frames {
             let name = format!("section{k}_{field}_{:.4}us.png", f.time * 1e6);
-            picture::draw_sections(&out.join(name), std::slice::from_ref(f), spec.color_by, body_names, labels)?;
+            picture::draw_sections(
+                &out.join(name),
+                std::slice::from_ref(f),
+                spec.color_by,
+                body_names,
+                labels,
+            )?;
         }
         picture::draw_sections(
             &out.join(format!("section{k}_{field}.png")),

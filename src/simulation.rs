@@ -19,7 +19,7 @@ pub struct Diagnostics {
     pub dt: f64,
     /// Kinetic energy, the mean of the half-step values ½ Σ m |v^{n±½}|² (J).
     pub kinetic: f64,
-    /// Σ m e (J).
+    /// Σ m e (J), the mean of the half-step values.
     pub internal: f64,
     /// Contact potential Φ (J).
     pub contact: f64,
@@ -101,13 +101,9 @@ impl<const D: usize> Simulation<D> {
                 &self.model,
                 &mut self.rates,
             ),
-            KernelKind::WendlandC2 => physics::compute_rates(
-                WendlandC2,
-                p,
-                &self.neighbors,
-                &self.model,
-                &mut self.rates,
-            ),
+            KernelKind::WendlandC2 => {
+                physics::compute_rates(WendlandC2, p, &self.neighbors, &self.model, &mut self.rates)
+            }
         }
         let n = p.n_real;
         // The stable step, its growth limited to 25 % a step; the collapse check uses it before
@@ -131,9 +127,9 @@ impl<const D: usize> Simulation<D> {
         let p = &self.particles;
         let g = self.model.gravity;
         let mut gap = f64::INFINITY;
-        let (mut ke_old, mut mom_old) = (0.0, [0.0; 3]);
+        let (mut ke_old, mut ie_old, mut mom_old) = (0.0, 0.0, [0.0; 3]);
         for i in 0..n {
-            d.internal += p.m[i] * p.e[i];
+            ie_old += p.m[i] * p.eh[i];
             d.contact += self.rates.contact_energy[i];
             d.gravity -= p.m[i] * g.dot(&p.x[i]);
             d.max_pressure = d.max_pressure.max(p.p[i]);
@@ -151,19 +147,36 @@ impl<const D: usize> Simulation<D> {
         }
         d.min_interbody_distance = gap.is_finite().then_some(gap);
 
-        integrate::advance(&mut self.particles, &self.rates, &self.model, dt, self.dt_prev);
+        integrate::advance(
+            &mut self.particles,
+            &self.rates,
+            &self.model,
+            dt,
+            self.dt_prev,
+        );
 
         let p = &self.particles;
-        let mut ke_new = 0.0;
+        let (mut ke_new, mut ie_new, mut mom_new) = (0.0, 0.0, [0.0; 3]);
         for i in 0..n {
             ke_new += 0.5 * p.m[i] * p.vh[i].norm_squared();
+            ie_new += p.m[i] * p.eh[i];
             let mv = to3(&(p.vh[i] * p.m[i]));
             for k in 0..3 {
-                d.momentum[k] += 0.5 * (mom_old[k] + mv[k]);
+                mom_new[k] += mv[k];
             }
             d.momentum_scale += p.m[i] * p.vh[i].norm();
         }
-        d.kinetic = 0.5 * (ke_old + ke_new);
+        // Whole-step values are the means of the half-step ones; the first step starts from
+        // v^0 and e^0 themselves.
+        if self.step == 0 {
+            d.kinetic = ke_old;
+            d.internal = ie_old;
+            d.momentum = mom_old;
+        } else {
+            d.kinetic = 0.5 * (ke_old + ke_new);
+            d.internal = 0.5 * (ie_old + ie_new);
+            d.momentum = [0, 1, 2].map(|k| 0.5 * (mom_old[k] + mom_new[k]));
+        }
         d.total = d.kinetic + d.internal + d.contact + d.gravity;
         self.time += dt;
         self.step += 1;
@@ -176,33 +189,50 @@ impl<const D: usize> Simulation<D> {
     fn check(&self, dt: f64, dt_stable: f64, dt_first: f64) -> Result<()> {
         let p = &self.particles;
         let r = &self.rates;
-        let bad = (0..p.n_real).find_map(|i| {
-            let cause = if !p.x[i].iter().all(|c| c.is_finite()) {
-                "position is not finite".to_string()
-            } else if !(r.acc[i].iter().all(|c| c.is_finite())
-                && r.drho[i].is_finite()
-                && r.de[i].is_finite()
-                && r.grad_v[i].iter().all(|c| c.is_finite()))
-            {
-                "acceleration or strain rate is not finite (NaN/inf)".to_string()
-            } else if !(p.rho[i] + dt * r.drho[i] > 0.0) {
-                format!(
-                    "density would fall to {:.4e} kg/m³ (from {:.4e})",
-                    p.rho[i] + dt * r.drho[i],
-                    p.rho[i]
-                )
-            } else if !(p.e[i].is_finite() && p.p[i].is_finite()) {
-                "internal energy or pressure is not finite".to_string()
+        // The state first (a bad particle spoils its neighbours' rates), then the rates.
+        let state = (0..p.n_real).find_map(|i| {
+            let finite = p.x[i].iter().all(|c| c.is_finite())
+                && p.v[i].iter().all(|c| c.is_finite())
+                && p.rho[i].is_finite()
+                && p.e[i].is_finite()
+                && p.p[i].is_finite()
+                && p.s[i].iter().all(|c| c.is_finite());
+            if !finite {
+                Some((i, "position, velocity, density, energy or stress is not finite (NaN/inf)".to_string()))
             } else if p.v[i].norm() > self.speed_limit {
-                format!(
+                Some((i, format!(
                     "speed {:.4e} m/s exceeds 10× the fastest initial speed or sound speed ({:.4e} m/s)",
                     p.v[i].norm(),
                     self.speed_limit
-                )
+                )))
             } else {
-                return None;
-            };
-            Some((i, cause))
+                None
+            }
+        });
+        let bad = state.or_else(|| {
+            (0..p.n_real).find_map(|i| {
+                if !(r.acc[i].iter().all(|c| c.is_finite())
+                    && r.drho[i].is_finite()
+                    && r.de[i].is_finite()
+                    && r.grad_v[i].iter().all(|c| c.is_finite()))
+                {
+                    Some((
+                        i,
+                        "acceleration or strain rate is not finite (NaN/inf)".to_string(),
+                    ))
+                } else if !(p.rho[i] + dt * r.drho[i] > 0.0) {
+                    Some((
+                        i,
+                        format!(
+                            "density would fall to {:.4e} kg/m³ (from {:.4e})",
+                            p.rho[i] + dt * r.drho[i],
+                            p.rho[i]
+                        ),
+                    ))
+                } else {
+                    None
+                }
+            })
         });
         let (i, cause) = match bad {
             Some(b) => b,

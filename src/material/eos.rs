@@ -118,14 +118,27 @@ mod tests {
     fn reference_state_and_sound_speed() {
         let m = al2024();
         assert_eq!(m.pressure(m.rho0, 0.0), 0.0);
-        assert_relative_eq!(m.bulk_modulus(m.rho0, 0.0), m.rho0 * m.c0 * m.c0, max_relative = 1e-14);
-        assert_relative_eq!(m.pressure(0.9 * m.rho0, 0.0), -0.1 * m.rho0 * m.c0 * m.c0, max_relative = 1e-14);
+        assert_relative_eq!(
+            m.bulk_modulus(m.rho0, 0.0),
+            m.rho0 * m.c0 * m.c0,
+            max_relative = 1e-14
+        );
+        assert_relative_eq!(
+            m.pressure(0.9 * m.rho0, 0.0),
+            -0.1 * m.rho0 * m.c0 * m.c0,
+            max_relative = 1e-14
+        );
     }
 
     #[test]
     fn bulk_modulus_matches_isentropic_derivative() {
         // K_s = ρ dp/dρ along de = p/ρ² dρ.
-        let m = MieGruneisen { a: 0.5, s2: 0.3, s3: 0.1, ..al2024() };
+        let m = MieGruneisen {
+            a: 0.5,
+            s2: 0.3,
+            s3: 0.1,
+            ..al2024()
+        };
         for (rho, e) in [(3200.0, 2e5), (2500.0, 1e4), (4000.0, 3e6)] {
             let d = rho * 1e-7;
             let p = m.pressure(rho, e);

@@ -29,10 +29,7 @@ impl Material {
     pub fn from_spec(spec: &MaterialSpec) -> Self {
         let rho0 = spec.density;
         let eos: Box<dyn Eos> = match spec.eos {
-            EosSpec::Linear { bulk_modulus } => Box::new(LinearEos {
-                rho0,
-                bulk_modulus,
-            }),
+            EosSpec::Linear { bulk_modulus } => Box::new(LinearEos { rho0, bulk_modulus }),
             EosSpec::MieGruneisen {
                 c0,
                 s1,

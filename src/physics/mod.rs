@@ -8,7 +8,8 @@
 //!   T_ij = σ_i/ρ_i² + σ_j/ρ_j² − Π_ij I + A_ij
 //! - energy: de_i/dt = −½ Σ_{j∈N_i} m_j v_ij·(T_ij ∇_i W_ij), the pairwise form whose sum
 //!   Σ m_i de_i/dt is exactly minus the power of the internal forces, so total energy is
-//!   conserved by the spatial discretisation (DESIGN.md §2 allows it in place of σ:D/ρ).
+//!   conserved by the spatial discretisation (DESIGN.md §2 allows it in place of σ:D/ρ);
+//!   plus the lagged correction −½ Σ m_j (u_i − u_j)·(T_ij ∇_i W_ij) (see `integrate`).
 //!
 //! N_i are neighbours of the same body or of a `welded` body; C_i, neighbours of a body in
 //! `contact`, enter only through [`crate::contact`] (the paper's W = 0 across bodies).
@@ -97,6 +98,8 @@ pub struct Rates<const D: usize> {
     pub drho: Vec<f64>,
     /// de/dt.
     pub de: Vec<f64>,
+    /// Lagged energy correction of the last step (J/kg), added to e as it is.
+    pub de_lag: Vec<f64>,
     /// Velocity gradient L = ∂v/∂x.
     pub grad_v: Vec<Tensor<D>>,
     /// Contact force f_c (N).
@@ -145,6 +148,7 @@ pub fn compute_rates<const D: usize, K: Kernel>(
     out.acc.resize(n, Vector::<D>::zeros());
     out.drho.resize(n, 0.0);
     out.de.resize(n, 0.0);
+    out.de_lag.resize(n, 0.0);
     out.grad_v.resize(n, Tensor::<D>::zeros());
     out.contact_force.resize(n, Vector::<D>::zeros());
     out.contact_energy.resize(n, 0.0);
@@ -163,6 +167,7 @@ pub fn compute_rates<const D: usize, K: Kernel>(
         .par_iter_mut()
         .zip(out.drho.par_iter_mut())
         .zip(out.de.par_iter_mut())
+        .zip(out.de_lag.par_iter_mut())
         .zip(out.grad_v.par_iter_mut())
         .zip(out.contact_force.par_iter_mut())
         .zip(out.contact_energy.par_iter_mut())
@@ -170,7 +175,7 @@ pub fn compute_rates<const D: usize, K: Kernel>(
         .zip(out.min_contact_gap.par_iter_mut())
         .enumerate();
     per_particle.for_each(
-        |(i, (((((((acc_o, drho_o), de_o), l_o), fc_o), phi_o), dt_o), gap_o))| {
+        |(i, ((((((((acc_o, drho_o), de_o), de_lag_o), l_o), fc_o), phi_o), dt_o), gap_o))| {
             let xi = p.x[i];
             let vi = p.v[i];
             let hi = p.h[i];
@@ -181,12 +186,14 @@ pub fn compute_rates<const D: usize, K: Kernel>(
             let sr2_i = sr2[i];
             let art_i = art[i];
             let dp_i = p.h0[i] / ratio;
+            let u_i = p.u[i];
 
             let mut acc = Vector::<D>::zeros();
             let mut fc = Vector::<D>::zeros();
             let mut l = Tensor::<D>::zeros();
             let mut drho = 0.0;
             let mut de = 0.0;
+            let mut de_lag = 0.0;
             let mut phi = 0.0;
             let mut k_contact = 0.0;
             let mut mu_max = 0.0_f64;
@@ -235,6 +242,7 @@ pub fn compute_rates<const D: usize, K: Kernel>(
                         let tg = t * grad - grad * pi;
                         acc += tg * mj;
                         de -= 0.5 * mj * vij.dot(&tg);
+                        de_lag -= 0.5 * mj * (u_i - p.u[j]).dot(&tg);
                     }
                     PairRule::Contact(params) => {
                         let vol_j = p.m[j] / p.rho[j];
@@ -252,6 +260,7 @@ pub fn compute_rates<const D: usize, K: Kernel>(
             *acc_o = acc + fc / mi + gravity;
             *drho_o = drho;
             *de_o = de;
+            *de_lag_o = de_lag;
             *l_o = l;
             *fc_o = fc;
             *phi_o = phi;

@@ -27,7 +27,10 @@ mod tests {
 
     #[test]
     fn only_for_approaching_pairs_and_positive() {
-        assert_eq!(monaghan_gingold(1.0, 1.0, 1.0, 1.0, 1.0, 1.0, 2.0), (0.0, 0.0));
+        assert_eq!(
+            monaghan_gingold(1.0, 1.0, 1.0, 1.0, 1.0, 1.0, 2.0),
+            (0.0, 0.0)
+        );
         let (pi, mu) = monaghan_gingold(-2.0, 1.0, 1.0, 3.0, 2.0, 1.0, 2.0);
         let m = -2.0 / 1.01;
         assert_eq!(mu, m);

@@ -68,11 +68,7 @@ pub fn contains<const D: usize>(shape: &Shape, x: &Vector<D>) -> bool {
 }
 
 /// Lattice points of the shape at spacing dp, on the model's side of the symmetry planes.
-pub fn lattice<const D: usize>(
-    shape: &Shape,
-    dp: f64,
-    planes: &[Plane],
-) -> Vec<Vector<D>> {
+pub fn lattice<const D: usize>(shape: &Shape, dp: f64, planes: &[Plane]) -> Vec<Vector<D>> {
     let (lo, hi) = bounding_box(shape);
     let mut origin = [0.0; 3];
     let mut count = [1usize; 3];
@@ -118,11 +114,22 @@ mod tests {
         };
         let n = lattice::<3>(&s, 0.05, &[]).len() as f64;
         let v = n * 0.05f64.powi(3);
-        assert!((v / (4.0 / 3.0 * std::f64::consts::PI) - 1.0).abs() < 0.01, "{v}");
+        assert!(
+            (v / (4.0 / 3.0 * std::f64::consts::PI) - 1.0).abs() < 0.01,
+            "{v}"
+        );
         // A quarter sphere keeps a quarter of the particles, the first layer at Δp/2.
         let planes = [
-            Plane { axis: 0, position: 0.0, side: 1.0 },
-            Plane { axis: 1, position: 0.0, side: 1.0 },
+            Plane {
+                axis: 0,
+                position: 0.0,
+                side: 1.0,
+            },
+            Plane {
+                axis: 1,
+                position: 0.0,
+                side: 1.0,
+            },
         ];
         let q = lattice::<3>(&s, 0.05, &planes);
         assert_eq!(q.len() as f64, n / 4.0);
