@@ -1,0 +1,171 @@
+//! The command line as a user meets it: every example checks and runs, each kind of output file
+//! opens in VTK's own reader (tests/vtk_check.py, in the .venv made by .ci/setup_python.sh), and
+//! mistakes give located errors and a non-zero exit.
+
+use std::path::{Path, PathBuf};
+use std::process::Command;
+use strike::output::history::History;
+use strike::output::summary::Summary;
+
+fn root() -> PathBuf {
+    PathBuf::from(env!("CARGO_MANIFEST_DIR"))
+}
+
+fn strike(args: &[&str]) -> std::process::Output {
+    Command::new(env!("CARGO_BIN_EXE_strike"))
+        .args(args)
+        .current_dir(root())
+        .output()
+        .expect("strike runs")
+}
+
+fn python() -> PathBuf {
+    let py = root().join(".venv/bin/python");
+    assert!(
+        py.exists(),
+        "{} is missing: run .ci/setup_python.sh to create the VTK environment",
+        py.display()
+    );
+    py
+}
+
+fn examples() -> Vec<PathBuf> {
+    let mut v: Vec<PathBuf> = std::fs::read_dir(root().join("examples"))
+        .unwrap()
+        .map(|e| e.unwrap().path())
+        .filter(|p| p.extension().is_some_and(|e| e == "toml"))
+        .collect();
+    v.sort();
+    assert!(!v.is_empty());
+    v
+}
+
+fn out_dir(name: &str) -> PathBuf {
+    let d = Path::new(env!("CARGO_TARGET_TMPDIR")).join("cli").join(name);
+    let _ = std::fs::remove_dir_all(&d);
+    d
+}
+
+/// Every example deck passes `strike check` and runs a few steps to completion.
+#[test]
+fn every_example_checks_and_runs() {
+    for deck in examples() {
+        let name = deck.file_stem().unwrap().to_string_lossy().to_string();
+        let check = strike(&["check", deck.to_str().unwrap()]);
+        let text = String::from_utf8_lossy(&check.stdout);
+        assert!(check.status.success(), "{name}: check failed: {}", String::from_utf8_lossy(&check.stderr));
+        assert!(text.contains("particles:") && text.contains("first time step"), "{name}: {text}");
+        let out = out_dir(&name);
+        let run = strike(&["run", deck.to_str().unwrap(), "--out", out.to_str().unwrap(), "--max-steps", "3"]);
+        assert!(run.status.success(), "{name}: run failed: {}", String::from_utf8_lossy(&run.stderr));
+        let s = Summary::read(&out.join("summary.json")).unwrap();
+        assert_eq!(s.status, "completed", "{name}");
+        assert_eq!(s.steps, 3, "{name}");
+        assert!(s.particles > 0 && s.particle_steps_per_second > 0.0, "{name}");
+    }
+}
+
+/// A run's snapshots (.vtp and the .pvd series) open in VTK's reader with every field; the
+/// history and summary carry the documented columns and keys.
+#[test]
+fn run_outputs_open_in_vtk() {
+    let out = out_dir("outputs");
+    let run = strike(&["run", "examples/hugoniot_elastic_limit.toml", "--out", out.to_str().unwrap(), "--max-steps", "40"]);
+    assert!(run.status.success(), "{}", String::from_utf8_lossy(&run.stderr));
+    let s = Summary::read(&out.join("summary.json")).unwrap();
+    let fields = "body,velocity,pressure,density,internal_energy,deviatoric_stress,von_mises,plastic_strain,smoothing_length,contact_force";
+    let pvd = out.join("hugoniot_elastic_limit.pvd");
+    let check = Command::new(python())
+        .arg(root().join("tests/vtk_check.py"))
+        .arg(&pvd)
+        .args(["--points", &s.particles.to_string(), "--fields", fields])
+        .output()
+        .unwrap();
+    assert!(check.status.success(), "{}{}", String::from_utf8_lossy(&check.stdout), String::from_utf8_lossy(&check.stderr));
+    let h = History::read(&out.join("history.csv")).unwrap();
+    for c in ["time", "dt", "kinetic_energy", "internal_energy", "total_energy", "momentum_x", "momentum_y", "momentum_z", "contact_energy", "min_interbody_distance"] {
+        assert!(h.columns.iter().any(|x| x == c), "history lacks {c}");
+    }
+    assert!(h.rows.len() >= 2);
+    // momentum_z is 0 in 2D.
+    assert!(h.column("momentum_z").unwrap().iter().all(|&m| m == 0.0));
+    let json: serde_json::Value = serde_json::from_str(&std::fs::read_to_string(out.join("summary.json")).unwrap()).unwrap();
+    for k in ["particles", "steps", "wall_seconds", "particle_steps_per_second", "end_time", "energy_error", "status", "momentum_error", "min_interbody_distance"] {
+        assert!(json.get(k).is_some(), "summary lacks {k}");
+    }
+    assert_eq!(s.steps, 40);
+}
+
+/// A bad deck: non-zero exit, and the message names the file, line and key, with no panic.
+#[test]
+fn bad_deck_gives_a_located_error() {
+    let dir = out_dir("bad_deck");
+    std::fs::create_dir_all(&dir).unwrap();
+    let deck = dir.join("bad.toml");
+    let text = std::fs::read_to_string(root().join("examples/elastic_wave.toml"))
+        .unwrap()
+        .replace("density = 2700.0", "density = -2700.0");
+    std::fs::write(&deck, &text).unwrap();
+    let line = text.lines().position(|l| l.contains("density = -2700.0")).unwrap() + 1;
+    for cmd in ["check", "run"] {
+        let out = strike(&[cmd, deck.to_str().unwrap()]);
+        let err = String::from_utf8_lossy(&out.stderr);
+        assert!(!out.status.success());
+        assert!(err.contains(&format!("bad.toml:{line}:")), "{err}");
+        assert!(err.contains("density"), "{err}");
+        assert!(!err.contains("panicked"), "{err}");
+    }
+    let missing = strike(&["run", "no/such/deck.toml"]);
+    assert!(!missing.status.success());
+    assert!(String::from_utf8_lossy(&missing.stderr).contains("no/such/deck.toml"));
+}
+
+/// A run that goes unstable exits non-zero, says which particle, body, place and cause, and
+/// leaves its last good snapshot and a summary whose status gives the reason.
+#[test]
+fn unstable_run_stops_with_a_reason() {
+    let dir = out_dir("unstable");
+    std::fs::create_dir_all(&dir).unwrap();
+    let deck = dir.join("unstable.toml");
+    // A 5 km/s impact with no artificial viscosity: plain SPH cannot hold the shock and the
+    // particles scatter (the speed check trips).
+    let text = r#"
+[simulation]
+dimension = 2
+end_time = 2.0e-6
+viscosity = { alpha = 0.0, beta = 0.0 }
+[materials.al]
+library = "al_1100_o"
+[[body]]
+name = "flyer"
+material = "al"
+spacing = 0.2e-3
+velocity = [5000.0, 0.0]
+shape = { type = "rectangle", min = [-2.0e-3, 0.0], max = [0.0, 0.8e-3] }
+[[body]]
+name = "target"
+material = "al"
+spacing = 0.2e-3
+shape = { type = "rectangle", min = [0.0, 0.0], max = [4.0e-3, 0.8e-3] }
+[[interaction]]
+bodies = ["flyer", "target"]
+type = "welded"
+"#;
+    std::fs::write(&deck, text).unwrap();
+    let out = dir.join("run");
+    let run = strike(&["run", deck.to_str().unwrap(), "--out", out.to_str().unwrap()]);
+    let err = String::from_utf8_lossy(&run.stderr);
+    assert!(!run.status.success(), "{err}");
+    assert!(err.contains("particle ") && err.contains("run stopped"), "{err}");
+    let s = Summary::read(&out.join("summary.json")).unwrap();
+    assert!(s.status.starts_with("unstable"), "{}", s.status);
+    for part in ["particle ", "of body '", ") m: ", "exceeds"] {
+        assert!(s.status.contains(part), "{}", s.status);
+    }
+    // The last good state is on disk, after the first snapshot.
+    let snapshots = std::fs::read_dir(&out)
+        .unwrap()
+        .filter(|e| e.as_ref().unwrap().path().extension().is_some_and(|x| x == "vtp"))
+        .count();
+    assert!(snapshots >= 2, "{snapshots} snapshots");
+}
