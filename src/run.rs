@@ -37,6 +37,8 @@ pub fn run(case: &Case, opts: &RunOptions) -> Result<Summary> {
 
 /// Running totals for the summary.
 struct Tally {
+    /// Momentum components that no symmetry plane acts on (a plane pushes along its normal).
+    conserved: [bool; 3],
     e0: Option<f64>,
     p0: [f64; 3],
     energy_scale: f64,
@@ -137,7 +139,12 @@ fn run_dim<const D: usize>(case: &Case, opts: &RunOptions) -> Result<Summary> {
     };
     take_pictures(&sim, &mut picture_times);
 
+    let mut conserved = [true; 3];
+    for plane in &case.symmetry {
+        conserved[plane.axis] = false;
+    }
     let mut tally = Tally {
+        conserved,
         e0: None,
         p0: [0.0; 3],
         energy_scale: 0.0,
@@ -229,10 +236,9 @@ fn run_dim<const D: usize>(case: &Case, opts: &RunOptions) -> Result<Summary> {
         initial_energy: tally.e0.unwrap_or(0.0),
         final_energy: tally.last.total,
         momentum_error: tally.momentum_dev
-            / tally
-                .p0
-                .iter()
-                .map(|p| p * p)
+            / (0..3)
+                .filter(|&k| tally.conserved[k])
+                .map(|k| tally.p0[k] * tally.p0[k])
                 .sum::<f64>()
                 .sqrt()
                 .max(tally.momentum_scale)

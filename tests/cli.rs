@@ -41,7 +41,9 @@ fn examples() -> Vec<PathBuf> {
 }
 
 fn out_dir(name: &str) -> PathBuf {
-    let d = Path::new(env!("CARGO_TARGET_TMPDIR")).join("cli").join(name);
+    let d = Path::new(env!("CARGO_TARGET_TMPDIR"))
+        .join("cli")
+        .join(name);
     let _ = std::fs::remove_dir_all(&d);
     d
 }
@@ -53,15 +55,36 @@ fn every_example_checks_and_runs() {
         let name = deck.file_stem().unwrap().to_string_lossy().to_string();
         let check = strike(&["check", deck.to_str().unwrap()]);
         let text = String::from_utf8_lossy(&check.stdout);
-        assert!(check.status.success(), "{name}: check failed: {}", String::from_utf8_lossy(&check.stderr));
-        assert!(text.contains("particles:") && text.contains("first time step"), "{name}: {text}");
+        assert!(
+            check.status.success(),
+            "{name}: check failed: {}",
+            String::from_utf8_lossy(&check.stderr)
+        );
+        assert!(
+            text.contains("particles:") && text.contains("first time step"),
+            "{name}: {text}"
+        );
         let out = out_dir(&name);
-        let run = strike(&["run", deck.to_str().unwrap(), "--out", out.to_str().unwrap(), "--max-steps", "3"]);
-        assert!(run.status.success(), "{name}: run failed: {}", String::from_utf8_lossy(&run.stderr));
+        let run = strike(&[
+            "run",
+            deck.to_str().unwrap(),
+            "--out",
+            out.to_str().unwrap(),
+            "--max-steps",
+            "3",
+        ]);
+        assert!(
+            run.status.success(),
+            "{name}: run failed: {}",
+            String::from_utf8_lossy(&run.stderr)
+        );
         let s = Summary::read(&out.join("summary.json")).unwrap();
         assert_eq!(s.status, "completed", "{name}");
         assert_eq!(s.steps, 3, "{name}");
-        assert!(s.particles > 0 && s.particle_steps_per_second > 0.0, "{name}");
+        assert!(
+            s.particles > 0 && s.particle_steps_per_second > 0.0,
+            "{name}"
+        );
     }
 }
 
@@ -70,8 +93,19 @@ fn every_example_checks_and_runs() {
 #[test]
 fn run_outputs_open_in_vtk() {
     let out = out_dir("outputs");
-    let run = strike(&["run", "examples/hugoniot_elastic_limit.toml", "--out", out.to_str().unwrap(), "--max-steps", "40"]);
-    assert!(run.status.success(), "{}", String::from_utf8_lossy(&run.stderr));
+    let run = strike(&[
+        "run",
+        "examples/hugoniot_elastic_limit.toml",
+        "--out",
+        out.to_str().unwrap(),
+        "--max-steps",
+        "40",
+    ]);
+    assert!(
+        run.status.success(),
+        "{}",
+        String::from_utf8_lossy(&run.stderr)
+    );
     let s = Summary::read(&out.join("summary.json")).unwrap();
     let fields = "body,velocity,pressure,density,internal_energy,deviatoric_stress,von_mises,plastic_strain,smoothing_length,contact_force";
     let pvd = out.join("hugoniot_elastic_limit.pvd");
@@ -81,16 +115,43 @@ fn run_outputs_open_in_vtk() {
         .args(["--points", &s.particles.to_string(), "--fields", fields])
         .output()
         .unwrap();
-    assert!(check.status.success(), "{}{}", String::from_utf8_lossy(&check.stdout), String::from_utf8_lossy(&check.stderr));
+    assert!(
+        check.status.success(),
+        "{}{}",
+        String::from_utf8_lossy(&check.stdout),
+        String::from_utf8_lossy(&check.stderr)
+    );
     let h = History::read(&out.join("history.csv")).unwrap();
-    for c in ["time", "dt", "kinetic_energy", "internal_energy", "total_energy", "momentum_x", "momentum_y", "momentum_z", "contact_energy", "min_interbody_distance"] {
+    for c in [
+        "time",
+        "dt",
+        "kinetic_energy",
+        "internal_energy",
+        "total_energy",
+        "momentum_x",
+        "momentum_y",
+        "momentum_z",
+        "contact_energy",
+        "min_interbody_distance",
+    ] {
         assert!(h.columns.iter().any(|x| x == c), "history lacks {c}");
     }
     assert!(h.rows.len() >= 2);
     // momentum_z is 0 in 2D.
     assert!(h.column("momentum_z").unwrap().iter().all(|&m| m == 0.0));
-    let json: serde_json::Value = serde_json::from_str(&std::fs::read_to_string(out.join("summary.json")).unwrap()).unwrap();
-    for k in ["particles", "steps", "wall_seconds", "particle_steps_per_second", "end_time", "energy_error", "status", "momentum_error", "min_interbody_distance"] {
+    let json: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(out.join("summary.json")).unwrap()).unwrap();
+    for k in [
+        "particles",
+        "steps",
+        "wall_seconds",
+        "particle_steps_per_second",
+        "end_time",
+        "energy_error",
+        "status",
+        "momentum_error",
+        "min_interbody_distance",
+    ] {
         assert!(json.get(k).is_some(), "summary lacks {k}");
     }
     assert_eq!(s.steps, 40);
@@ -106,7 +167,11 @@ fn bad_deck_gives_a_located_error() {
         .unwrap()
         .replace("density = 2700.0", "density = -2700.0");
     std::fs::write(&deck, &text).unwrap();
-    let line = text.lines().position(|l| l.contains("density = -2700.0")).unwrap() + 1;
+    let line = text
+        .lines()
+        .position(|l| l.contains("density = -2700.0"))
+        .unwrap()
+        + 1;
     for cmd in ["check", "run"] {
         let out = strike(&[cmd, deck.to_str().unwrap()]);
         let err = String::from_utf8_lossy(&out.stderr);
@@ -153,10 +218,18 @@ type = "welded"
 "#;
     std::fs::write(&deck, text).unwrap();
     let out = dir.join("run");
-    let run = strike(&["run", deck.to_str().unwrap(), "--out", out.to_str().unwrap()]);
+    let run = strike(&[
+        "run",
+        deck.to_str().unwrap(),
+        "--out",
+        out.to_str().unwrap(),
+    ]);
     let err = String::from_utf8_lossy(&run.stderr);
     assert!(!run.status.success(), "{err}");
-    assert!(err.contains("particle ") && err.contains("run stopped"), "{err}");
+    assert!(
+        err.contains("particle ") && err.contains("run stopped"),
+        "{err}"
+    );
     let s = Summary::read(&out.join("summary.json")).unwrap();
     assert!(s.status.starts_with("unstable"), "{}", s.status);
     for part in ["particle ", "of body '", ") m: ", "exceeds"] {
@@ -165,7 +238,13 @@ type = "welded"
     // The last good state is on disk, after the first snapshot.
     let snapshots = std::fs::read_dir(&out)
         .unwrap()
-        .filter(|e| e.as_ref().unwrap().path().extension().is_some_and(|x| x == "vtp"))
+        .filter(|e| {
+            e.as_ref()
+                .unwrap()
+                .path()
+                .extension()
+                .is_some_and(|x| x == "vtp")
+        })
         .count();
     assert!(snapshots >= 2, "{snapshots} snapshots");
 }

@@ -25,7 +25,9 @@ pub struct Summary {
     pub energy_error: f64,
     pub initial_energy: f64,
     pub final_energy: f64,
-    /// Largest |P(t) − P(0)| / max(|P(0)|, Σ m|v|) over the run.
+    /// Largest |P(t) − P(0)| / max(|P(0)|, Σ m|v|) over the run, over the momentum components
+    /// parallel to every symmetry plane (a plane exerts force along its normal). Gravity and
+    /// prescribed bodies change momentum too.
     pub momentum_error: f64,
     /// Smallest distance between particles of different bodies over the run, / Δp_avg
     /// (None: bodies never came within the kernel support, or one body).
