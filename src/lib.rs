@@ -9,6 +9,7 @@
 // their size does not matter.
 #![allow(clippy::result_large_err)]
 
+pub mod bench;
 pub mod boundary;
 pub mod case;
 pub mod check;

@@ -33,6 +33,15 @@ enum Command {
         #[arg(long)]
         max_steps: Option<u64>,
     },
+    /// Benchmark built-in cases (1 thread and all cores) and write bench.json.
+    Bench {
+        /// Fewer steps and a smaller large case (a smoke test).
+        #[arg(long)]
+        quick: bool,
+        /// Where to write the JSON report.
+        #[arg(long, default_value = "bench.json")]
+        json: PathBuf,
+    },
     /// Read and validate a deck without running it: particles, h, first time step, memory and
     /// run-time estimates, warnings.
     Check {
@@ -87,6 +96,17 @@ fn main_inner() -> Result<(), Report> {
             let summary = run::run(&c, &opts).map_err(|e| report(e, &case))?;
             println!("{}", check::summary_text(&summary));
             println!("output in {}", out_dir.display());
+            Ok(())
+        }
+        Command::Bench { quick, json } => {
+            let report = strike::bench::run_all(quick).map_err(|e| miette!("{e}"))?;
+            for c in &report.cases {
+                println!("{}", strike::bench::line(c));
+            }
+            let text = serde_json::to_string_pretty(&report).map_err(|e| miette!("{e}"))?;
+            std::fs::write(&json, text + "\n")
+                .map_err(|e| miette!("cannot write {}: {e}", json.display()))?;
+            println!("written to {}", json.display());
             Ok(())
         }
         Command::Check { case } => {

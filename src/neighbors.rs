@@ -1,11 +1,16 @@
-//! Neighbour search: a cell-linked list on sorted cell keys, with no fixed domain box.
+//! Neighbour search: a cell-linked list with no fixed domain box.
 //!
-//! Cells have the size of the largest support 2 h_max, so every neighbour of a particle lies in
-//! its own or an adjacent cell. Particles are sorted by cell key (ties by index), so the grid
-//! needs no bounding box known in advance and only occupied cells cost memory: debris may fly
-//! anywhere. The lists hold, for each real particle i, every particle j ≠ i (real or ghost) with
-//! r_ij < h_i + h_j (= 2 h_ij, the support of W(r, h_ij)), in a fixed order (cell offset, then
-//! index), so results do not depend on the number of threads.
+//! Cells have the size of the largest smoothing length h_max, so every neighbour of a particle
+//! (r_ij < h_i + h_j ≤ 2 h_max) lies within two cells of its own. Cells are keyed by integer
+//! coordinates from the particles' current bounding box, the last axis varying fastest, so the
+//! five cells along the last axis around a particle are one contiguous run of the sorted
+//! particles: a particle's candidates are 5^(D−1) contiguous runs.
+//!
+//! When the box is compact (its cell count at most a few times the particle count) the grid is
+//! dense and built by counting sort in O(N); when debris has spread the box, only occupied cells
+//! are kept, sorted by key, and a run is found by binary search. Either way the lists hold, for
+//! each real particle i, every particle j ≠ i (real or ghost) with r_ij < h_i + h_j (= 2 h_ij,
+//! the support of W(r, h_ij)), in a fixed order, so results do not depend on the thread count.
 //!
 //! The one list serves both the conservation equations and the contact: each pair is classified
 //! by its bodies when it is used (see `physics::PairTable`), so there is no second search.
@@ -13,22 +18,66 @@
 use crate::particles::Vector;
 use rayon::prelude::*;
 
-/// Bits per axis in a cell key (cells are clamped to this range; a clamped cell only adds
-/// candidates, the distance test keeps the result exact).
+/// Cells reach this many cells either side (cell size h_max, support ≤ 2 h_max).
+const REACH: i64 = 2;
+/// A dense grid is used while it has at most this many cells per particle.
+const DENSE_CELLS_PER_PARTICLE: usize = 8;
+/// Bits per axis of a sparse cell key.
 const KEY_BITS: u32 = 21;
 const KEY_MAX: i64 = (1 << KEY_BITS) - 1;
 
-/// Neighbour lists of the real particles, kept between steps so that rebuilding allocates
-/// nothing once the run has settled.
+/// Neighbour lists of the real particles, with the buffers of the search kept between steps so
+/// that rebuilding allocates nothing once the run has settled.
 #[derive(Debug, Default, Clone)]
 pub struct NeighborList {
     /// lists[i]: neighbours of real particle i.
     pub lists: Vec<Vec<u32>>,
-    /// (cell key, particle) sorted; reused buffer.
-    sorted: Vec<(u64, u32)>,
-    /// Start of each occupied cell in `sorted`, and its key.
+    /// Particles in cell order.
+    sorted: Vec<u32>,
+    /// Dense: start of each cell in `sorted` (len cells + 1). Sparse: start of each occupied
+    /// cell, with its key in `cell_key`.
     cell_start: Vec<u32>,
     cell_key: Vec<u64>,
+    /// Cell coordinates of each particle, and (sparse) key-index pairs for sorting.
+    coords: Vec<[i64; 3]>,
+    keyed: Vec<(u64, u32)>,
+}
+
+/// The cell geometry of one build.
+#[derive(Debug, Clone, Copy)]
+struct Grid<const D: usize> {
+    lo: Vector<D>,
+    cell: f64,
+    dims: [i64; 3],
+    dense: bool,
+}
+
+impl<const D: usize> Grid<D> {
+    fn coords(&self, x: &Vector<D>) -> [i64; 3] {
+        let mut c = [0i64; 3];
+        for k in 0..D {
+            c[k] = (((x[k] - self.lo[k]) / self.cell).floor() as i64).clamp(0, self.dims[k] - 1);
+        }
+        c
+    }
+
+    /// Dense cell index (last axis fastest).
+    fn index(&self, c: [i64; 3]) -> usize {
+        let mut idx = 0i64;
+        for k in 0..D {
+            idx = idx * self.dims[k] + c[k];
+        }
+        idx as usize
+    }
+
+    /// Sparse key (last axis fastest, KEY_BITS per axis).
+    fn key(&self, c: [i64; 3]) -> u64 {
+        let mut key = 0u64;
+        for &ck in c.iter().take(D) {
+            key = (key << KEY_BITS) | ck as u64;
+        }
+        key
+    }
 }
 
 impl NeighborList {
@@ -37,141 +86,194 @@ impl NeighborList {
         self.lists.iter().map(Vec::len).sum()
     }
 
-    /// Particle indices in cell order (real and ghost), from the last build: a locality-friendly
-    /// ordering for reordering the particle store.
-    pub fn cell_order(&self) -> impl Iterator<Item = usize> + '_ {
-        self.sorted.iter().map(|&(_, i)| i as usize)
+    /// Particle indices (real and ghost) in cell order from the last build: a locality-friendly
+    /// order for the particle store.
+    pub fn cell_order(&self) -> &[u32] {
+        &self.sorted
     }
 
     /// Rebuild for positions `x` (real then ghosts) and smoothing lengths `h`; lists for the
     /// first `n_real` particles.
     pub fn build<const D: usize>(&mut self, x: &[Vector<D>], h: &[f64], n_real: usize) {
         let n = x.len();
-        let h_max = h.iter().copied().fold(0.0_f64, f64::max);
-        let cell = 2.0 * h_max;
-        let mut lo = Vector::<D>::repeat(f64::INFINITY);
-        for p in x {
-            lo = lo.inf(p);
-        }
-        let key_of = |p: &Vector<D>| -> u64 {
-            let mut key = 0u64;
-            for k in 0..D {
-                let c = ((p[k] - lo[k]) / cell).floor() as i64;
-                key = (key << KEY_BITS) | c.clamp(0, KEY_MAX) as u64;
-            }
-            key
-        };
-        let coords_of = |key: u64| -> [i64; 3] {
-            let mut c = [0i64; 3];
-            for k in 0..D {
-                c[k] = ((key >> (KEY_BITS * (D - 1 - k) as u32)) & KEY_MAX as u64) as i64;
-            }
-            c
-        };
-
-        self.sorted.clear();
-        self.sorted
-            .par_extend((0..n).into_par_iter().map(|i| (key_of(&x[i]), i as u32)));
-        self.sorted.par_sort_unstable();
-        self.cell_start.clear();
-        self.cell_key.clear();
-        for (k, &(key, _)) in self.sorted.iter().enumerate() {
-            if self.cell_key.last() != Some(&key) {
-                self.cell_key.push(key);
-                self.cell_start.push(k as u32);
-            }
-        }
-        self.cell_start.push(n as u32);
-
         self.lists.resize_with(n_real, Vec::new);
         self.lists.truncate(n_real);
+        if n == 0 {
+            self.sorted.clear();
+            return;
+        }
+        let grid = self.bin(x, h);
         let sorted = &self.sorted;
         let cell_start = &self.cell_start;
         let cell_key = &self.cell_key;
-        let offsets: Vec<[i64; 3]> = neighbor_offsets::<D>();
+        let coords = &self.coords;
+        let last = D - 1;
         self.lists.par_iter_mut().enumerate().for_each(|(i, list)| {
             list.clear();
             let xi = x[i];
             let hi = h[i];
-            let c = coords_of(key_of(&xi));
-            for off in &offsets {
-                let mut key = 0u64;
-                let mut valid = true;
-                for k in 0..D {
-                    let ck = c[k] + off[k];
-                    if !(0..=KEY_MAX).contains(&ck) {
-                        valid = false;
+            let c = coords[i];
+            // Runs along the last axis for every offset of the other axes.
+            let lo_last = (c[last] - REACH).max(0);
+            let hi_last = (c[last] + REACH).min(grid.dims[last] - 1);
+            let mut visit = |a: usize, b: usize| {
+                for &j in &sorted[a..b] {
+                    let j = j as usize;
+                    let support = hi + h[j];
+                    if j != i && (xi - x[j]).norm_squared() < support * support {
+                        list.push(j as u32);
                     }
-                    key = (key << KEY_BITS) | (ck.clamp(0, KEY_MAX) as u64);
                 }
-                if !valid {
+            };
+            let mut offsets = [[0i64; 3]; 25];
+            let mut count = 0;
+            let (r0, r1) = if D == 3 { (REACH, REACH) } else { (REACH, 0) };
+            for d0 in -r0..=r0 {
+                for d1 in -r1..=r1 {
+                    offsets[count] = [d0, d1, 0];
+                    count += 1;
+                }
+            }
+            for off in &offsets[..count] {
+                let mut first = c;
+                let mut inside = true;
+                for k in 0..last {
+                    first[k] = c[k] + off[k];
+                    inside &= (0..grid.dims[k]).contains(&first[k]);
+                }
+                if !inside {
                     continue;
                 }
-                if let Ok(cidx) = cell_key.binary_search(&key) {
-                    let (a, b) = (cell_start[cidx] as usize, cell_start[cidx + 1] as usize);
-                    for &(_, j) in &sorted[a..b] {
-                        let j = j as usize;
-                        if j == i {
-                            continue;
-                        }
-                        let support = hi + h[j];
-                        if (xi - x[j]).norm_squared() < support * support {
-                            list.push(j as u32);
-                        }
+                let mut end = first;
+                first[last] = lo_last;
+                end[last] = hi_last;
+                if grid.dense {
+                    let a = cell_start[grid.index(first)] as usize;
+                    let b = cell_start[grid.index(end) + 1] as usize;
+                    visit(a, b);
+                } else {
+                    let (ka, kb) = (grid.key(first), grid.key(end));
+                    let a = cell_key.partition_point(|&k| k < ka);
+                    let b = cell_key.partition_point(|&k| k <= kb);
+                    if a < b {
+                        visit(cell_start[a] as usize, cell_start[b] as usize);
                     }
                 }
             }
         });
     }
-}
 
-/// The 3^D cell offsets in a fixed order.
-fn neighbor_offsets<const D: usize>() -> Vec<[i64; 3]> {
-    let mut out = Vec::new();
-    let r = |k: usize| if k < D { -1..=1 } else { 0..=0 };
-    for a in r(0) {
-        for b in r(1) {
-            for c in r(2) {
-                out.push([a, b, c]);
-            }
+    /// Sort the particles into cells; fills `sorted`, `cell_start` (and `cell_key` when sparse)
+    /// and `coords`.
+    fn bin<const D: usize>(&mut self, x: &[Vector<D>], h: &[f64]) -> Grid<D> {
+        let n = x.len();
+        let h_max = h.iter().copied().fold(0.0_f64, f64::max);
+        let mut lo = Vector::<D>::repeat(f64::INFINITY);
+        let mut hi = Vector::<D>::repeat(f64::NEG_INFINITY);
+        for p in x {
+            lo = lo.inf(p);
+            hi = hi.sup(p);
         }
+        let cell = h_max.max(f64::MIN_POSITIVE);
+        let mut dims = [1i64; 3];
+        let mut total: f64 = 1.0;
+        for k in 0..D {
+            let d = ((hi[k] - lo[k]) / cell).floor() + 1.0;
+            total *= d;
+            dims[k] = d.min(KEY_MAX as f64) as i64;
+        }
+        let dense = total <= (DENSE_CELLS_PER_PARTICLE * n + 64) as f64;
+        let grid = Grid { lo, cell, dims, dense };
+        self.coords.clear();
+        self.coords.par_extend(x.par_iter().map(|p| grid.coords(p)));
+        self.sorted.clear();
+        self.cell_start.clear();
+        self.cell_key.clear();
+        if dense {
+            // Counting sort by cell: O(N), stable (index order within a cell).
+            let cells = total as usize;
+            self.cell_start.resize(cells + 1, 0);
+            for c in &self.coords {
+                self.cell_start[grid.index(*c) + 1] += 1;
+            }
+            for k in 0..cells {
+                self.cell_start[k + 1] += self.cell_start[k];
+            }
+            self.sorted.resize(n, 0);
+            let mut fill = self.cell_start[..cells].to_vec();
+            for (i, c) in self.coords.iter().enumerate() {
+                let slot = &mut fill[grid.index(*c)];
+                self.sorted[*slot as usize] = i as u32;
+                *slot += 1;
+            }
+        } else {
+            self.keyed.clear();
+            let coords = &self.coords;
+            self.keyed
+                .par_extend((0..n).into_par_iter().map(|i| (grid.key(coords[i]), i as u32)));
+            self.keyed.par_sort_unstable();
+            for (k, &(key, i)) in self.keyed.iter().enumerate() {
+                if self.cell_key.last() != Some(&key) {
+                    self.cell_key.push(key);
+                    self.cell_start.push(k as u32);
+                }
+                self.sorted.push(i);
+            }
+            self.cell_start.push(n as u32);
+        }
+        grid
     }
-    out
 }
 
 #[cfg(test)]
 mod tests {
     use super::*;
 
-    /// Compare with brute force on a random cloud spread over wildly different scales.
+    fn brute<const D: usize>(x: &[Vector<D>], h: &[f64], n_real: usize) -> Vec<Vec<u32>> {
+        (0..n_real)
+            .map(|i| {
+                (0..x.len())
+                    .filter(|&j| j != i && (x[i] - x[j]).norm() < h[i] + h[j])
+                    .map(|j| j as u32)
+                    .collect()
+            })
+            .collect()
+    }
+
+    fn compare<const D: usize>(x: &[Vector<D>], h: &[f64], n_real: usize) {
+        let mut nl = NeighborList::default();
+        nl.build(x, h, n_real);
+        let expect = brute(x, h, n_real);
+        assert_eq!(nl.lists.len(), n_real);
+        for i in 0..n_real {
+            let mut got = nl.lists[i].clone();
+            got.sort();
+            assert_eq!(got, expect[i], "particle {i}");
+        }
+    }
+
+    fn rnd(seed: &mut u64) -> f64 {
+        *seed = seed.wrapping_mul(6364136223846793005).wrapping_add(1442695040888963407);
+        (*seed >> 11) as f64 / (1u64 << 53) as f64
+    }
+
+    /// A compact cloud (dense grid) and one with far-flung debris (sparse grid), 2D and 3D,
+    /// against brute force.
     #[test]
     fn matches_brute_force() {
         let mut seed = 12345u64;
-        let mut rnd = || {
-            seed = seed
-                .wrapping_mul(6364136223846793005)
-                .wrapping_add(1442695040888963407);
-            (seed >> 11) as f64 / (1u64 << 53) as f64
-        };
-        let mut x = Vec::new();
-        let mut h = Vec::new();
-        for k in 0..600 {
-            let scale = if k % 50 == 0 { 1e4 } else { 1.0 };
-            x.push(Vector::<3>::new(rnd() * scale, rnd(), rnd() - 7.0));
-            h.push(0.05 + 0.05 * rnd());
-        }
-        let mut nl = NeighborList::default();
-        nl.build(&x, &h, 500);
-        assert_eq!(nl.lists.len(), 500);
-        for i in 0..500 {
-            let mut expect: Vec<u32> = (0..600)
-                .filter(|&j| j != i && (x[i] - x[j]).norm() < h[i] + h[j])
-                .map(|j| j as u32)
-                .collect();
-            let mut got = nl.lists[i].clone();
-            expect.sort();
-            got.sort();
-            assert_eq!(got, expect, "particle {i}");
+        for spread in [1.0, 1e4] {
+            let mut x3 = Vec::new();
+            let mut x2 = Vec::new();
+            let mut h = Vec::new();
+            for k in 0..600 {
+                let scale = if k % 50 == 0 { spread } else { 1.0 };
+                x3.push(Vector::<3>::new(rnd(&mut seed) * scale, rnd(&mut seed), rnd(&mut seed) - 7.0));
+                x2.push(Vector::<2>::new(rnd(&mut seed) * scale, rnd(&mut seed) + 3.0));
+                h.push(0.03 + 0.05 * rnd(&mut seed));
+            }
+            compare(&x3, &h, 500);
+            compare(&x2, &h, 500);
         }
     }
 }

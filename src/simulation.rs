@@ -59,7 +59,11 @@ pub struct Simulation<const D: usize> {
     pub speed_limit: f64,
     neighbors: NeighborList,
     rates: Rates<D>,
+    order: Vec<usize>,
 }
+
+/// Real particles are put back in cell order this often (steps), for memory locality.
+pub const REORDER_EVERY: u64 = 25;
 
 impl<const D: usize> Simulation<D> {
     /// Set up a case (the deck's dimension must be D).
@@ -83,6 +87,7 @@ impl<const D: usize> Simulation<D> {
             speed_limit: 10.0 * v0.max(c0),
             neighbors: NeighborList::default(),
             rates: Rates::default(),
+            order: Vec::new(),
         })
     }
 
@@ -90,6 +95,19 @@ impl<const D: usize> Simulation<D> {
     /// (the last good state) and the error names the particle, its body, place and cause.
     pub fn step(&mut self, dt_max: f64) -> Result<Diagnostics> {
         let p = &mut self.particles;
+        if self.step > 0 && self.step % REORDER_EVERY == 0 {
+            // The cell order of the last search, real particles only.
+            let n = p.n_real;
+            self.order.clear();
+            self.order.extend(
+                self.neighbors
+                    .cell_order()
+                    .iter()
+                    .map(|&i| i as usize)
+                    .filter(|&i| i < n),
+            );
+            p.permute(&self.order);
+        }
         integrate::predict_velocity(p, &self.model, self.dt_prev);
         boundary::rebuild_ghosts(p, &self.symmetry);
         self.neighbors.build(&p.x, &p.h, p.n_real);

@@ -1,0 +1,221 @@
+//! `strike bench`: fixed built-in cases run for a fixed number of steps after a warm-up, on one
+//! thread and on all cores, reporting particle-steps/s, particle-neighbour interactions/s per
+//! core, mean neighbours and peak memory per particle. Also written to `bench.json`.
+
+use crate::deck;
+use crate::error::{Error, Result};
+use crate::simulation::Simulation;
+use serde::Serialize;
+use std::time::Instant;
+
+/// One measured case at one thread count.
+#[derive(Debug, Clone, Serialize)]
+pub struct BenchCase {
+    pub name: String,
+    pub dimension: usize,
+    pub particles: usize,
+    pub threads: usize,
+    pub steps: u64,
+    pub wall_seconds: f64,
+    pub particle_steps_per_second: f64,
+    /// Each particle's neighbours counted once per step (the one pass of a step).
+    pub interactions_per_second_per_core: f64,
+    pub mean_neighbors: f64,
+    /// Peak resident memory while the case ran (set up + steps), whole process (bytes).
+    pub peak_rss_bytes: u64,
+    /// Growth of the peak resident memory over the process before the case, per particle.
+    pub bytes_per_particle: f64,
+}
+
+#[derive(Debug, Clone, Serialize)]
+pub struct BenchReport {
+    pub cases: Vec<BenchCase>,
+}
+
+/// Two elastic aluminium cubes (20³ particles each, h = 1.2 Δp) colliding head-on at ±50 m/s.
+pub const CUBES_3D: &str = r#"
+[simulation]
+name = "cubes_3d"
+dimension = 3
+end_time = 1.0
+[materials.al]
+density = 2700.0
+eos = { type = "linear" }
+strength = { type = "elastic", youngs_modulus = 68.9e9, poissons_ratio = 0.33 }
+[[body]]
+name = "left"
+material = "al"
+spacing = 1.0e-3
+velocity = [50.0, 0.0, 0.0]
+shape = { type = "box", min = [-0.02, 0.0, 0.0], max = [0.0, 0.02, 0.02] }
+[[body]]
+name = "right"
+material = "al"
+spacing = 1.0e-3
+velocity = [-50.0, 0.0, 0.0]
+shape = { type = "box", min = [0.001, 0.0, 0.0], max = [0.021, 0.02, 0.02] }
+"#;
+
+/// Two 2D elastic plates (200 × 50 particles each) colliding head-on.
+pub const PLATES_2D: &str = r#"
+[simulation]
+name = "plates_2d"
+dimension = 2
+end_time = 1.0
+[materials.al]
+density = 2700.0
+eos = { type = "linear" }
+strength = { type = "elastic", youngs_modulus = 68.9e9, poissons_ratio = 0.33 }
+[[body]]
+name = "left"
+material = "al"
+spacing = 1.0e-4
+velocity = [50.0, 0.0]
+shape = { type = "rectangle", min = [-0.02, 0.0], max = [0.0, 0.005] }
+[[body]]
+name = "right"
+material = "al"
+spacing = 1.0e-4
+velocity = [-50.0, 0.0]
+shape = { type = "rectangle", min = [0.0001, 0.0], max = [0.0201, 0.005] }
+"#;
+
+/// A cube of `n`³ particles of the 3D cube material, for the memory and scaling figures.
+pub fn cube_deck(n: usize) -> String {
+    let l = n as f64 * 1e-3;
+    format!(
+        r#"
+[simulation]
+name = "cube_{n}"
+dimension = 3
+end_time = 1.0
+[materials.al]
+density = 2700.0
+eos = {{ type = "linear" }}
+strength = {{ type = "elastic", youngs_modulus = 68.9e9, poissons_ratio = 0.33 }}
+[[body]]
+name = "cube"
+material = "al"
+spacing = 1.0e-3
+velocity = [10.0, 0.0, 0.0]
+shape = {{ type = "box", min = [0.0, 0.0, 0.0], max = [{l}, {l}, {l}] }}
+"#
+    )
+}
+
+/// The sphere-plate demo deck at its default resolution.
+pub const SPHERE_PLATE: &str = include_str!("../examples/sphere_plate.toml");
+
+/// Peak and current resident memory of the process (VmHWM, VmRSS), bytes.
+fn rss() -> (u64, u64) {
+    let text = std::fs::read_to_string("/proc/self/status").unwrap_or_default();
+    let get = |key: &str| {
+        text.lines()
+            .find(|l| l.starts_with(key))
+            .and_then(|l| l.split_whitespace().nth(1))
+            .and_then(|v| v.parse::<u64>().ok())
+            .map_or(0, |kb| kb * 1024)
+    };
+    (get("VmHWM:"), get("VmRSS:"))
+}
+
+/// Reset the peak-RSS counter to the current RSS (Linux ≥ 4.0; ignored elsewhere).
+fn reset_peak() {
+    let _ = std::fs::write("/proc/self/clear_refs", "5");
+}
+
+/// Measure one deck at one thread count: `warmup` steps, then `steps` timed steps.
+pub fn measure(text: &str, label: &str, threads: usize, warmup: u64, steps: u64) -> Result<BenchCase> {
+    let case = deck::parse(text, label)?;
+    let pool = rayon::ThreadPoolBuilder::new()
+        .num_threads(threads)
+        .build()
+        .map_err(|e| Error::Invalid(format!("cannot start {threads} threads: {e}")))?;
+    reset_peak();
+    let (_, base) = rss();
+    pool.install(|| match case.dimension {
+        2 => measure_dim::<2>(&case, threads, warmup, steps, base),
+        _ => measure_dim::<3>(&case, threads, warmup, steps, base),
+    })
+}
+
+fn measure_dim<const D: usize>(
+    case: &crate::case::Case,
+    threads: usize,
+    warmup: u64,
+    steps: u64,
+    base_rss: u64,
+) -> Result<BenchCase> {
+    let mut sim = Simulation::<D>::new(case)?;
+    for _ in 0..warmup {
+        sim.step(f64::INFINITY)?;
+    }
+    let start = Instant::now();
+    let mut interactions = 0u64;
+    for _ in 0..steps {
+        interactions += sim.step(f64::INFINITY)?.interactions as u64;
+    }
+    let wall = start.elapsed().as_secs_f64();
+    let n = sim.particles.n_real;
+    let (peak, _) = rss();
+    Ok(BenchCase {
+        name: case.name.clone(),
+        dimension: D,
+        particles: n,
+        threads,
+        steps,
+        wall_seconds: wall,
+        particle_steps_per_second: (n as u64 * steps) as f64 / wall,
+        interactions_per_second_per_core: interactions as f64 / wall / threads as f64,
+        mean_neighbors: interactions as f64 / (n as u64 * steps) as f64,
+        peak_rss_bytes: peak,
+        bytes_per_particle: peak.saturating_sub(base_rss) as f64 / n as f64,
+    })
+}
+
+/// The standard benchmark: every case on 1 thread and on all cores, plus the million-particle
+/// memory case on all cores. `quick` runs fewer steps (for a smoke test).
+pub fn run_all(quick: bool) -> Result<BenchReport> {
+    let all = std::thread::available_parallelism().map_or(1, |n| n.get());
+    let mut threads = vec![1];
+    if all > 1 {
+        threads.push(all);
+    }
+    let (warm, steps) = if quick { (1, 2) } else { (5, 40) };
+    let mut cases = Vec::new();
+    let decks: [(&str, &str, u64); 3] = [
+        (CUBES_3D, "bench:cubes_3d", steps),
+        (SPHERE_PLATE, "bench:sphere_plate", steps / 2),
+        (PLATES_2D, "bench:plates_2d", steps),
+    ];
+    for (text, label, s) in decks {
+        for &t in &threads {
+            let c = measure(text, label, t, warm, s.max(2))?;
+            eprintln!("{}", line(&c));
+            cases.push(c);
+        }
+    }
+    let big = if quick { cube_deck(30) } else { cube_deck(100) };
+    let c = measure(&big, "bench:cube_large", all, 1, if quick { 1 } else { 3 })?;
+    eprintln!("{}", line(&c));
+    cases.push(c);
+    Ok(BenchReport { cases })
+}
+
+/// One human-readable line.
+pub fn line(c: &BenchCase) -> String {
+    format!(
+        "{:<14} {}D {:>8} particles {:>2} threads {:>4} steps {:>8.2} s  {:.3e} particle-steps/s  {:.3e} interactions/s/core  {:.1} neighbours  peak {:.0} MB  {:.0} B/particle",
+        c.name,
+        c.dimension,
+        c.particles,
+        c.threads,
+        c.steps,
+        c.wall_seconds,
+        c.particle_steps_per_second,
+        c.interactions_per_second_per_core,
+        c.mean_neighbors,
+        c.peak_rss_bytes as f64 / 1e6,
+        c.bytes_per_particle
+    )
+}
