@@ -125,7 +125,13 @@ fn reset_peak() {
 }
 
 /// Measure one deck at one thread count: `warmup` steps, then `steps` timed steps.
-pub fn measure(text: &str, label: &str, threads: usize, warmup: u64, steps: u64) -> Result<BenchCase> {
+pub fn measure(
+    text: &str,
+    label: &str,
+    threads: usize,
+    warmup: u64,
+    steps: u64,
+) -> Result<BenchCase> {
     let case = deck::parse(text, label)?;
     let pool = rayon::ThreadPoolBuilder::new()
         .num_threads(threads)

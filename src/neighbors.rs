@@ -55,8 +55,8 @@ struct Grid<const D: usize> {
 impl<const D: usize> Grid<D> {
     fn coords(&self, x: &Vector<D>) -> [i64; 3] {
         let mut c = [0i64; 3];
-        for k in 0..D {
-            c[k] = (((x[k] - self.lo[k]) / self.cell).floor() as i64).clamp(0, self.dims[k] - 1);
+        for (k, ck) in c.iter_mut().enumerate().take(D) {
+            *ck = (((x[k] - self.lo[k]) / self.cell).floor() as i64).clamp(0, self.dims[k] - 1);
         }
         c
     }
@@ -64,8 +64,8 @@ impl<const D: usize> Grid<D> {
     /// Dense cell index (last axis fastest).
     fn index(&self, c: [i64; 3]) -> usize {
         let mut idx = 0i64;
-        for k in 0..D {
-            idx = idx * self.dims[k] + c[k];
+        for (&dk, &ck) in self.dims.iter().zip(&c).take(D) {
+            idx = idx * dk + ck;
         }
         idx as usize
     }
@@ -183,7 +183,12 @@ impl NeighborList {
             dims[k] = d.min(KEY_MAX as f64) as i64;
         }
         let dense = total <= (DENSE_CELLS_PER_PARTICLE * n + 64) as f64;
-        let grid = Grid { lo, cell, dims, dense };
+        let grid = Grid {
+            lo,
+            cell,
+            dims,
+            dense,
+        };
         self.coords.clear();
         self.coords.par_extend(x.par_iter().map(|p| grid.coords(p)));
         self.sorted.clear();
@@ -209,8 +214,11 @@ impl NeighborList {
         } else {
             self.keyed.clear();
             let coords = &self.coords;
-            self.keyed
-                .par_extend((0..n).into_par_iter().map(|i| (grid.key(coords[i]), i as u32)));
+            self.keyed.par_extend(
+                (0..n)
+                    .into_par_iter()
+                    .map(|i| (grid.key(coords[i]), i as u32)),
+            );
             self.keyed.par_sort_unstable();
             for (k, &(key, i)) in self.keyed.iter().enumerate() {
                 if self.cell_key.last() != Some(&key) {
@@ -245,15 +253,17 @@ mod tests {
         nl.build(x, h, n_real);
         let expect = brute(x, h, n_real);
         assert_eq!(nl.lists.len(), n_real);
-        for i in 0..n_real {
-            let mut got = nl.lists[i].clone();
+        for (i, (list, expect)) in nl.lists.iter().zip(&expect).enumerate() {
+            let mut got = list.clone();
             got.sort();
-            assert_eq!(got, expect[i], "particle {i}");
+            assert_eq!(&got, expect, "particle {i}");
         }
     }
 
     fn rnd(seed: &mut u64) -> f64 {
-        *seed = seed.wrapping_mul(6364136223846793005).wrapping_add(1442695040888963407);
+        *seed = seed
+            .wrapping_mul(6364136223846793005)
+            .wrapping_add(1442695040888963407);
         (*seed >> 11) as f64 / (1u64 << 53) as f64
     }
 
@@ -268,8 +278,15 @@ mod tests {
             let mut h = Vec::new();
             for k in 0..600 {
                 let scale = if k % 50 == 0 { spread } else { 1.0 };
-                x3.push(Vector::<3>::new(rnd(&mut seed) * scale, rnd(&mut seed), rnd(&mut seed) - 7.0));
-                x2.push(Vector::<2>::new(rnd(&mut seed) * scale, rnd(&mut seed) + 3.0));
+                x3.push(Vector::<3>::new(
+                    rnd(&mut seed) * scale,
+                    rnd(&mut seed),
+                    rnd(&mut seed) - 7.0,
+                ));
+                x2.push(Vector::<2>::new(
+                    rnd(&mut seed) * scale,
+                    rnd(&mut seed) + 3.0,
+                ));
                 h.push(0.03 + 0.05 * rnd(&mut seed));
             }
             compare(&x3, &h, 500);

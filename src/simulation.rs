@@ -95,7 +95,7 @@ impl<const D: usize> Simulation<D> {
     /// (the last good state) and the error names the particle, its body, place and cause.
     pub fn step(&mut self, dt_max: f64) -> Result<Diagnostics> {
         let p = &mut self.particles;
-        if self.step > 0 && self.step % REORDER_EVERY == 0 {
+        if self.step > 0 && self.step.is_multiple_of(REORDER_EVERY) {
             // The cell order of the last search, real particles only.
             let n = p.n_real;
             self.order.clear();
@@ -238,7 +238,7 @@ impl<const D: usize> Simulation<D> {
                         i,
                         "acceleration or strain rate is not finite (NaN/inf)".to_string(),
                     ))
-                } else if !(p.rho[i] + dt * r.drho[i] > 0.0) {
+                } else if p.rho[i] + dt * r.drho[i] <= 0.0 || (p.rho[i] + dt * r.drho[i]).is_nan() {
                     Some((
                         i,
                         format!(
@@ -254,7 +254,7 @@ impl<const D: usize> Simulation<D> {
         });
         let (i, cause) = match bad {
             Some(b) => b,
-            None if !(dt_stable >= 1e-6 * dt_first) => {
+            None if dt_stable < 1e-6 * dt_first || dt_stable.is_nan() => {
                 let i = (0..p.n_real)
                     .min_by(|&a, &b| r.dt[a].total_cmp(&r.dt[b]))
                     .unwrap_or(0);

@@ -146,7 +146,10 @@ pub fn compute_rates<const D: usize, K: Kernel>(
     let n = p.n_real;
     let all = p.len();
     let ratio = model.smoothing_ratio;
-    let any_art = model.materials.iter().any(|m| m.artificial_stress.is_some());
+    let any_art = model
+        .materials
+        .iter()
+        .any(|m| m.artificial_stress.is_some());
     out.gather.clear();
     out.gather.par_extend((0..all).into_par_iter().map(|i| {
         let sigma = p.stress(i);
@@ -206,7 +209,11 @@ pub fn compute_rates<const D: usize, K: Kernel>(
             let (xi, vi, hi, bi, rho_i, ci) = (gi.x, gi.v, gi.h, gi.body, gi.rho, gi.c);
             let vol_i = gi.m / rho_i;
             let sr2_i = gi.sr2;
-            let art_i = if any_art { art[i] } else { Tensor::<D>::zeros() };
+            let art_i = if any_art {
+                art[i]
+            } else {
+                Tensor::<D>::zeros()
+            };
             let u_i = gi.u;
 
             let mut acc = Vector::<D>::zeros();
