@@ -3,9 +3,10 @@
 pub mod shapes;
 
 use crate::boundary::Plane;
-use crate::case::{BodySpec, Case, EosSpec, InteractionKind, Motion};
+use crate::case::{BodySpec, Case, EosSpec, InteractionKind, KernelKind, Motion};
 use crate::contact::{self, ContactParams};
 use crate::error::{DeckLocation, Error, Result};
+use crate::kernel::{CubicSpline, WendlandC2};
 use crate::material::Material;
 use crate::neighbors::NeighborList;
 use crate::particles::{from3, Particles, Vector};
@@ -51,7 +52,9 @@ pub fn build<const D: usize>(case: &Case) -> Result<(Particles<D>, Model<D>)> {
         .iter()
         .map(|b| (b.motion == Motion::Prescribed).then(|| from3::<D>(b.velocity)))
         .collect();
-    let pairs = PairTable::new(case.bodies.len(), |a, b| pair_rule(case, &materials, a, b));
+    let pairs = PairTable::new(case.bodies.len(), |a, b| {
+        pair_rule::<D>(case, &materials, a, b)
+    });
     let s = &case.simulation;
     let model = Model {
         materials,
@@ -101,7 +104,7 @@ pub fn symmetry_planes(case: &Case) -> Vec<Plane> {
 }
 
 /// The rule between bodies a and b: the deck's, or contact with default settings.
-fn pair_rule(case: &Case, materials: &[Material], a: usize, b: usize) -> PairRule {
+fn pair_rule<const D: usize>(case: &Case, materials: &[Material], a: usize, b: usize) -> PairRule {
     let spec = case
         .interactions
         .iter()
@@ -116,7 +119,12 @@ fn pair_rule(case: &Case, materials: &[Material], a: usize, b: usize) -> PairRul
     };
     let n = exponent.unwrap_or(DEFAULT_EXPONENT);
     let k = stiffness.unwrap_or_else(|| {
-        contact::default_stiffness(expected_contact_pressure(case, materials, a, b), n)
+        let p = expected_contact_pressure(case, materials, a, b);
+        let ratio = case.simulation.smoothing_ratio;
+        match case.simulation.kernel {
+            KernelKind::CubicSpline => contact::default_stiffness::<D, _>(CubicSpline, ratio, p, n),
+            KernelKind::WendlandC2 => contact::default_stiffness::<D, _>(WendlandC2, ratio, p, n),
+        }
     });
     PairRule::Contact(ContactParams {
         stiffness: k,
