@@ -64,6 +64,7 @@ impl Tally {
             .max(d.kinetic + d.internal.abs() + d.contact + (d.gravity - self.gravity0).abs());
         self.energy_dev = self.energy_dev.max((d.total - e0).abs());
         let dp: f64 = (0..3)
+            .filter(|&k| self.conserved[k])
             .map(|k| (d.momentum[k] - self.p0[k]).powi(2))
             .sum::<f64>()
             .sqrt();

@@ -32,8 +32,8 @@ pub struct Diagnostics {
     /// Σ m |v| (scale for the relative momentum error).
     pub momentum_scale: f64,
     pub max_pressure: f64,
-    /// Smallest distance between particles of different bodies in contact, / Δp_avg
-    /// (None: no such pair within the support).
+    /// Smallest distance between particles of different bodies (in contact or welded), / their
+    /// mean initial spacing (None: no such pair within the kernel support).
     pub min_interbody_distance: Option<f64>,
     /// Contact force on each body (N), z = 0 in 2D.
     pub body_contact_force: Vec<[f64; 3]>,
@@ -151,7 +151,7 @@ impl<const D: usize> Simulation<D> {
             d.contact += self.rates.contact_energy[i];
             d.gravity -= p.m[i] * g.dot(&p.x[i]);
             d.max_pressure = d.max_pressure.max(p.p[i]);
-            gap = gap.min(self.rates.min_contact_gap[i]);
+            gap = gap.min(self.rates.min_interbody_gap[i]);
             let f = to3(&self.rates.contact_force[i]);
             let fb = &mut d.body_contact_force[p.body[i] as usize];
             for k in 0..3 {

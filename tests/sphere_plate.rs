@@ -3,6 +3,7 @@
 
 use std::path::Path;
 use strike::deck;
+use strike::run::{run, RunOptions};
 use strike::simulation::Simulation;
 
 #[test]
@@ -78,4 +79,28 @@ fn coarse_sphere_plate_impact() {
         plug_below > 0.5,
         "the plate should be perforated: {plug_below}"
     );
+}
+
+/// The same coarse case through the run driver: the summary reports the momentum error over the
+/// components parallel to both symmetry planes (z), the energy error and the closest approach.
+#[test]
+fn coarse_sphere_plate_summary() {
+    let path = Path::new(env!("CARGO_MANIFEST_DIR")).join("examples/sphere_plate.toml");
+    let mut case = deck::load(&path).unwrap();
+    for b in &mut case.bodies {
+        b.spacing = 50e-6;
+    }
+    let opts = RunOptions {
+        out_dir: Path::new(env!("CARGO_TARGET_TMPDIR")).join("sphere_plate_summary"),
+        progress: false,
+        max_steps: Some(60),
+        write_fields: false,
+    };
+    let s = run(&case, &opts).unwrap();
+    println!("{s:?}");
+    assert_eq!(s.status, "completed");
+    assert_eq!(s.steps, 60);
+    assert!(s.momentum_error < 1e-10, "momentum error {}", s.momentum_error);
+    assert!(s.energy_error < 0.05, "energy error {}", s.energy_error);
+    assert!(s.min_interbody_distance.is_some_and(|g| g >= 0.5));
 }

@@ -109,8 +109,9 @@ pub struct Rates<const D: usize> {
     pub contact_energy: Vec<f64>,
     /// Stable time step of the particle (s).
     pub dt: Vec<f64>,
-    /// Smallest r_ij/Δp_avg to a particle of another body (∞ if none).
-    pub min_contact_gap: Vec<f64>,
+    /// Smallest r_ij/Δp_avg to a neighbour of another body, in contact or welded (∞ if none):
+    /// the no-mixing diagnostic.
+    pub min_interbody_gap: Vec<f64>,
     /// What the pass reads of each neighbour (all particles, ghosts included), packed into one
     /// record so that a neighbour costs one bounds check and few cache lines.
     gather: Vec<Gather<D>>,
@@ -183,7 +184,7 @@ pub fn compute_rates<const D: usize, K: Kernel>(
     out.contact_force.resize(n, Vector::<D>::zeros());
     out.contact_energy.resize(n, 0.0);
     out.dt.resize(n, 0.0);
-    out.min_contact_gap.resize(n, f64::INFINITY);
+    out.min_interbody_gap.resize(n, f64::INFINITY);
 
     let gather = &out.gather;
     let art = &out.art;
@@ -201,7 +202,7 @@ pub fn compute_rates<const D: usize, K: Kernel>(
         .zip(out.contact_force.par_iter_mut())
         .zip(out.contact_energy.par_iter_mut())
         .zip(out.dt.par_iter_mut())
-        .zip(out.min_contact_gap.par_iter_mut())
+        .zip(out.min_interbody_gap.par_iter_mut())
         .enumerate();
     per_particle.for_each(
         |(i, ((((((((acc_o, drho_o), de_o), de_lag_o), l_o), fc_o), phi_o), dt_o), gap_o))| {
@@ -241,6 +242,9 @@ pub fn compute_rates<const D: usize, K: Kernel>(
                 let grad = xij * (dw / r);
                 let vij = vi - gj.v;
                 v2_max = v2_max.max(vij.norm_squared());
+                if gj.body != bi {
+                    gap = gap.min(r / (0.5 * (gi.dp + gj.dp)));
+                }
                 match model.pairs.rule(bi, gj.body) {
                     PairRule::Conserve => {
                         let mj = gj.m;
@@ -278,7 +282,6 @@ pub fn compute_rates<const D: usize, K: Kernel>(
                         fc += grad * coef;
                         phi += 0.5 * pot;
                         k_contact += k;
-                        gap = gap.min(r / params.spacing);
                     }
                 }
             }
