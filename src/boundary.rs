@@ -25,24 +25,65 @@ impl Plane {
     }
 }
 
-/// Drop the old ghosts and build new ones from the current real state.
-pub fn rebuild_ghosts<const D: usize>(p: &mut Particles<D>, planes: &[Plane]) {
-    p.truncate_to_real();
-    if planes.is_empty() {
-        return;
-    }
-    let reach = 2.0 * p.h.iter().copied().fold(0.0_f64, f64::max);
-    for plane in planes {
-        let k = plane.axis;
-        let c = plane.position;
-        let n = p.len();
-        for i in 0..n {
-            if plane.depth(p.x[i][k]) < reach {
-                let g = p.push_copy(i);
-                mirror(p, g, k, c);
+/// Which particle each ghost mirrors, and in which plane (ghost k is particle n_real + k).
+#[derive(Debug, Clone, Default)]
+pub struct Ghosts {
+    map: Vec<(usize, usize)>,
+}
+
+impl Ghosts {
+    /// Drop the old ghosts and make new ones for every particle within `reach` of a plane.
+    pub fn rebuild<const D: usize>(&mut self, p: &mut Particles<D>, planes: &[Plane], reach: f64) {
+        p.truncate_to_real();
+        self.map.clear();
+        for (pi, plane) in planes.iter().enumerate() {
+            let n = p.len();
+            for i in 0..n {
+                if plane.depth(p.x[i][plane.axis]) < reach {
+                    let g = p.push_copy(i);
+                    mirror(p, g, plane.axis, plane.position);
+                    self.map.push((i, pi));
+                }
             }
         }
     }
+
+    /// Refresh the ghosts from the current state of their sources (same ghosts, same order).
+    pub fn update<const D: usize>(&self, p: &mut Particles<D>, planes: &[Plane]) {
+        let n = p.n_real;
+        for (k, &(src, pi)) in self.map.iter().enumerate() {
+            let g = n + k;
+            copy_state(p, src, g);
+            mirror(p, g, planes[pi].axis, planes[pi].position);
+        }
+    }
+}
+
+/// Rebuild the ghosts from scratch (the reach: the largest support 2 h_max).
+pub fn rebuild_ghosts<const D: usize>(p: &mut Particles<D>, planes: &[Plane]) {
+    let reach = 2.0 * p.h.iter().copied().fold(0.0_f64, f64::max);
+    Ghosts::default().rebuild(p, planes, reach);
+}
+
+fn copy_state<const D: usize>(p: &mut Particles<D>, src: usize, g: usize) {
+    p.x[g] = p.x[src];
+    p.v[g] = p.v[src];
+    p.vh[g] = p.vh[src];
+    p.a[g] = p.a[src];
+    p.u[g] = p.u[src];
+    p.m[g] = p.m[src];
+    p.rho[g] = p.rho[src];
+    p.e[g] = p.e[src];
+    p.eh[g] = p.eh[src];
+    p.p[g] = p.p[src];
+    p.c[g] = p.c[src];
+    p.s[g] = p.s[src];
+    p.h[g] = p.h[src];
+    p.h0[g] = p.h0[src];
+    p.eps_p[g] = p.eps_p[src];
+    p.body[g] = p.body[src];
+    p.id[g] = p.id[src];
+    p.contact_force[g] = p.contact_force[src];
 }
 
 fn mirror<const D: usize>(p: &mut Particles<D>, g: usize, k: usize, c: f64) {
@@ -102,5 +143,14 @@ mod tests {
         // Rebuilding replaces the ghosts, it does not add to them.
         rebuild_ghosts(&mut p, &planes);
         assert_eq!(p.len(), 4);
+        // Updating carries the sources' new state to the same ghosts.
+        let mut ghosts = Ghosts::default();
+        ghosts.rebuild(&mut p, &planes, 1.0);
+        p.x[0][2] = 6.0;
+        p.rho[0] = 2.0;
+        ghosts.update(&mut p, &planes);
+        assert_eq!(p.len(), 4);
+        assert_eq!(p.x[3], Vector::<3>::new(-0.1, -0.2, 6.0));
+        assert_eq!(p.rho[3], 2.0);
     }
 }

@@ -14,6 +14,9 @@ pub trait Kernel: Copy + Send + Sync {
     fn dw<const D: usize>(&self, r: f64, h: f64) -> f64;
     /// d²W/dr².
     fn d2w<const D: usize>(&self, r: f64, h: f64) -> f64;
+    /// (1/r) dW/dr, so that ∇_i W_ij = x_ij · grad_factor(r_ij, h): the form the pair loop uses,
+    /// written to avoid dividing by r where the kernel allows.
+    fn grad_factor<const D: usize>(&self, r: f64, h: f64) -> f64;
 }
 
 /// Cubic B-spline (Monaghan & Lattanzio 1985), q = r/h:
@@ -86,6 +89,29 @@ impl Kernel for CubicSpline {
         };
         Self::sigma::<D>() / (h_pow::<D>(h) * h * h) * f
     }
+
+    #[inline(always)]
+    fn grad_factor<const D: usize>(&self, r: f64, h: f64) -> f64 {
+        Self::grad_factor_impl::<D>(r, h)
+    }
+}
+
+impl CubicSpline {
+    /// (1/r) dW/dr = σ/h^(D+2) · { −3 + 9/4 q (q < 1); −¾ (2 − q)²/q (1 ≤ q < 2) }.
+    #[inline(always)]
+    fn grad_factor_impl<const D: usize>(r: f64, h: f64) -> f64 {
+        let inv_h = 1.0 / h;
+        let q = r * inv_h;
+        let f = if q < 1.0 {
+            -3.0 + 2.25 * q
+        } else if q < 2.0 {
+            let t = 2.0 - q;
+            -0.75 * t * t / q
+        } else {
+            return 0.0;
+        };
+        Self::sigma::<D>() * inv_h.powi(D as i32 + 2) * f
+    }
 }
 
 impl WendlandC2 {
@@ -127,6 +153,18 @@ impl Kernel for WendlandC2 {
         }
         let t = 1.0 - 0.5 * q;
         Self::sigma::<D>() / (h_pow::<D>(h) * h * h) * t * t * (10.0 * q - 5.0)
+    }
+
+    /// (1/r) dW/dr = −5 σ/h^(D+2) (1 − q/2)³.
+    #[inline(always)]
+    fn grad_factor<const D: usize>(&self, r: f64, h: f64) -> f64 {
+        let inv_h = 1.0 / h;
+        let q = r * inv_h;
+        if q >= 2.0 {
+            return 0.0;
+        }
+        let t = 1.0 - 0.5 * q;
+        -5.0 * Self::sigma::<D>() * inv_h.powi(D as i32 + 2) * t * t * t
     }
 }
 
@@ -212,6 +250,14 @@ mod tests {
                 ),
             ] {
                 assert!((dw - fd1).abs() < 1e-7, "dW at r={r}: {dw} vs {fd1}");
+                let gf = [
+                    CubicSpline.grad_factor::<3>(r, h) * r,
+                    WendlandC2.grad_factor::<2>(r, h) * r,
+                ];
+                assert!(
+                    gf.iter().any(|g| (g - dw).abs() < 1e-12 * (1.0 + dw.abs())),
+                    "grad factor at r={r}"
+                );
                 assert!((d2w - fd2).abs() < 1e-6, "d²W at r={r}: {d2w} vs {fd2}");
             }
         }

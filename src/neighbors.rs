@@ -1,7 +1,7 @@
 //! Neighbour search: a cell-linked list with no fixed domain box.
 //!
-//! Cells have the size of the largest smoothing length h_max, so every neighbour of a particle
-//! (r_ij < h_i + h_j ≤ 2 h_max) lies within two cells of its own. Cells are keyed by integer
+//! Cells have the size of the largest smoothing length plus half the skin, h_max + s/2, so every
+//! neighbour of a particle (r_ij < h_i + h_j + s ≤ 2 h_max + s) lies within two cells of its own. Cells are keyed by integer
 //! coordinates from the particles' current bounding box, the last axis varying fastest, so the
 //! five cells along the last axis around a particle are one contiguous run of the sorted
 //! particles: a particle's candidates are 5^(D−1) contiguous runs.
@@ -14,6 +14,13 @@
 //!
 //! The one list serves both the conservation equations and the contact: each pair is classified
 //! by its bodies when it is used (see `physics::PairTable`), so there is no second search.
+//!
+//! **Verlet skin.** Lists are built with the support widened by a skin s, r_ij < h_i + h_j + s,
+//! and kept while no pair can have crossed into the support: the positions may move by d and
+//! the smoothing lengths grow by δ (both the largest since the build) as long as
+//! 2 d + 2 δ < s. Users of the list test r_ij < h_i + h_j themselves, so the physics is that of
+//! an exact list; the skin only saves searches (a run at a few % of the sound speed searches
+//! every few tens of steps).
 
 use crate::particles::Vector;
 use rayon::prelude::*;
@@ -41,6 +48,10 @@ pub struct NeighborList {
     /// Cell coordinates of each particle, and (sparse) key-index pairs for sorting.
     coords: Vec<[i64; 3]>,
     keyed: Vec<(u64, u32)>,
+    /// Skin of the last build, and the positions and smoothing lengths it was built for.
+    skin: f64,
+    x_built: Vec<f64>,
+    h_built: Vec<f64>,
 }
 
 /// The cell geometry of one build.
@@ -92,17 +103,46 @@ impl NeighborList {
         &self.sorted
     }
 
-    /// Rebuild for positions `x` (real then ghosts) and smoothing lengths `h`; lists for the
-    /// first `n_real` particles.
-    pub fn build<const D: usize>(&mut self, x: &[Vector<D>], h: &[f64], n_real: usize) {
+    /// Whether the lists built last no longer hold every pair within the support for these
+    /// positions and smoothing lengths (always true before the first build or if the particle
+    /// count changed).
+    pub fn stale<const D: usize>(&self, x: &[Vector<D>], h: &[f64]) -> bool {
+        if self.h_built.len() != h.len() || self.x_built.len() != D * x.len() {
+            return true;
+        }
+        let (d2, dh) = x
+            .par_iter()
+            .zip(h.par_iter())
+            .enumerate()
+            .map(|(i, (xi, &hi))| {
+                let mut d2 = 0.0;
+                for k in 0..D {
+                    let dk = xi[k] - self.x_built[D * i + k];
+                    d2 += dk * dk;
+                }
+                (d2, hi - self.h_built[i])
+            })
+            .reduce(|| (0.0, 0.0), |a, b| (a.0.max(b.0), a.1.max(b.1)));
+        2.0 * d2.sqrt() + 2.0 * dh.max(0.0) >= self.skin
+    }
+
+    /// Rebuild for positions `x` (real then ghosts) and smoothing lengths `h`, with the support
+    /// widened by `skin`; lists for the first `n_real` particles.
+    pub fn build<const D: usize>(&mut self, x: &[Vector<D>], h: &[f64], n_real: usize, skin: f64) {
         let n = x.len();
+        self.skin = skin;
+        self.x_built.clear();
+        self.x_built
+            .extend(x.iter().flat_map(|p| p.iter().copied()));
+        self.h_built.clear();
+        self.h_built.extend_from_slice(h);
         self.lists.resize_with(n_real, Vec::new);
         self.lists.truncate(n_real);
         if n == 0 {
             self.sorted.clear();
             return;
         }
-        let grid = self.bin(x, h);
+        let grid = self.bin(x, h, skin);
         let sorted = &self.sorted;
         let cell_start = &self.cell_start;
         let cell_key = &self.cell_key;
@@ -119,7 +159,7 @@ impl NeighborList {
             let mut visit = |a: usize, b: usize| {
                 for &j in &sorted[a..b] {
                     let j = j as usize;
-                    let support = hi + h[j];
+                    let support = hi + h[j] + skin;
                     if j != i && (xi - x[j]).norm_squared() < support * support {
                         list.push(j as u32);
                     }
@@ -165,9 +205,9 @@ impl NeighborList {
 
     /// Sort the particles into cells; fills `sorted`, `cell_start` (and `cell_key` when sparse)
     /// and `coords`.
-    fn bin<const D: usize>(&mut self, x: &[Vector<D>], h: &[f64]) -> Grid<D> {
+    fn bin<const D: usize>(&mut self, x: &[Vector<D>], h: &[f64], skin: f64) -> Grid<D> {
         let n = x.len();
-        let h_max = h.iter().copied().fold(0.0_f64, f64::max);
+        let h_max = h.iter().copied().fold(0.0_f64, f64::max) + 0.5 * skin;
         let mut lo = Vector::<D>::repeat(f64::INFINITY);
         let mut hi = Vector::<D>::repeat(f64::NEG_INFINITY);
         for p in x {
@@ -250,7 +290,7 @@ mod tests {
 
     fn compare<const D: usize>(x: &[Vector<D>], h: &[f64], n_real: usize) {
         let mut nl = NeighborList::default();
-        nl.build(x, h, n_real);
+        nl.build(x, h, n_real, 0.0);
         let expect = brute(x, h, n_real);
         assert_eq!(nl.lists.len(), n_real);
         for (i, (list, expect)) in nl.lists.iter().zip(&expect).enumerate() {
@@ -258,6 +298,40 @@ mod tests {
             got.sort();
             assert_eq!(&got, expect, "particle {i}");
         }
+    }
+
+    /// With a skin the lists hold every pair within the support until `stale` says otherwise.
+    #[test]
+    fn skin_lists_stay_complete_until_stale() {
+        let mut seed = 7u64;
+        let mut x: Vec<Vector<3>> = (0..400)
+            .map(|_| Vector::<3>::new(rnd(&mut seed), rnd(&mut seed), rnd(&mut seed)))
+            .collect();
+        let h = vec![0.06; 400];
+        let mut nl = NeighborList::default();
+        nl.build(&x, &h, 400, 0.02);
+        let mut moves = 0;
+        while !nl.stale(&x, &h) {
+            let exact = brute(&x, &h, 400);
+            for (i, e) in exact.iter().enumerate() {
+                assert!(
+                    e.iter().all(|j| nl.lists[i].contains(j)),
+                    "pair lost at move {moves}"
+                );
+            }
+            for p in x.iter_mut() {
+                *p += Vector::<3>::new(
+                    rnd(&mut seed) - 0.5,
+                    rnd(&mut seed) - 0.5,
+                    rnd(&mut seed) - 0.5,
+                ) * 0.004;
+            }
+            moves += 1;
+        }
+        assert!(
+            moves >= 2,
+            "the skin should last a few moves, lasted {moves}"
+        );
     }
 
     fn rnd(seed: &mut u64) -> f64 {

@@ -57,13 +57,19 @@ pub struct Simulation<const D: usize> {
     pub dt_first: Option<f64>,
     /// A particle faster than this has gone unstable (m/s).
     pub speed_limit: f64,
+    /// Neighbour searches made so far.
+    pub searches: u64,
     neighbors: NeighborList,
+    ghosts: boundary::Ghosts,
     rates: Rates<D>,
     order: Vec<usize>,
+    last_reorder: u64,
 }
 
-/// Real particles are put back in cell order this often (steps), for memory locality.
-pub const REORDER_EVERY: u64 = 25;
+/// Real particles are put back in cell order at least this often (steps), for memory locality.
+pub const REORDER_EVERY: u64 = 50;
+/// Verlet skin of the neighbour lists, as a fraction of the largest smoothing length.
+pub const SKIN: f64 = 0.1;
 
 impl<const D: usize> Simulation<D> {
     /// Set up a case (the deck's dimension must be D).
@@ -85,9 +91,12 @@ impl<const D: usize> Simulation<D> {
             // DESIGN.md: 10× the fastest initial speed. Bodies starting at rest (a block on an
             // incline) would trip that at once, so the sound speed bounds it from below.
             speed_limit: 10.0 * v0.max(c0),
+            searches: 0,
             neighbors: NeighborList::default(),
+            ghosts: boundary::Ghosts::default(),
             rates: Rates::default(),
             order: Vec::new(),
+            last_reorder: 0,
         })
     }
 
@@ -95,22 +104,32 @@ impl<const D: usize> Simulation<D> {
     /// (the last good state) and the error names the particle, its body, place and cause.
     pub fn step(&mut self, dt_max: f64) -> Result<Diagnostics> {
         let p = &mut self.particles;
-        if self.step > 0 && self.step.is_multiple_of(REORDER_EVERY) {
-            // The cell order of the last search, real particles only.
-            let n = p.n_real;
-            self.order.clear();
-            self.order.extend(
-                self.neighbors
-                    .cell_order()
-                    .iter()
-                    .map(|&i| i as usize)
-                    .filter(|&i| i < n),
-            );
-            p.permute(&self.order);
-        }
         integrate::predict_velocity(p, &self.model, self.dt_prev);
-        boundary::rebuild_ghosts(p, &self.symmetry);
-        self.neighbors.build(&p.x, &p.h, p.n_real);
+        // Ghosts and neighbour lists are rebuilt when the skin is used up (positions are those
+        // of the real particles with the old ghosts refreshed), and every REORDER_EVERY steps
+        // at the latest, when the real particles are also put back in cell order.
+        self.ghosts.update(p, &self.symmetry);
+        let reorder = self.step >= self.last_reorder + REORDER_EVERY;
+        if reorder || self.neighbors.stale(&p.x, &p.h) {
+            if reorder && self.step > 0 {
+                let n = p.n_real;
+                self.order.clear();
+                self.order.extend(
+                    self.neighbors
+                        .cell_order()
+                        .iter()
+                        .map(|&i| i as usize)
+                        .filter(|&i| i < n),
+                );
+                p.permute(&self.order);
+                self.last_reorder = self.step;
+            }
+            let h_max = p.h.iter().copied().fold(0.0_f64, f64::max);
+            let skin = SKIN * h_max;
+            self.ghosts.rebuild(p, &self.symmetry, 2.0 * h_max + skin);
+            self.neighbors.build(&p.x, &p.h, p.n_real, skin);
+            self.searches += 1;
+        }
         match self.kernel {
             KernelKind::CubicSpline => physics::compute_rates(
                 CubicSpline,
@@ -138,7 +157,7 @@ impl<const D: usize> Simulation<D> {
             time: self.time,
             dt,
             body_contact_force: vec![[0.0; 3]; self.body_names.len()],
-            interactions: self.neighbors.lists[..n].iter().map(Vec::len).sum(),
+            interactions: self.rates.neighbors.iter().map(|&k| k as usize).sum(),
             max_pressure: f64::NEG_INFINITY,
             ..Default::default()
         };

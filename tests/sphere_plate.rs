@@ -100,7 +100,11 @@ fn coarse_sphere_plate_summary() {
     println!("{s:?}");
     assert_eq!(s.status, "completed");
     assert_eq!(s.steps, 60);
-    assert!(s.momentum_error < 1e-10, "momentum error {}", s.momentum_error);
+    assert!(
+        s.momentum_error < 1e-10,
+        "momentum error {}",
+        s.momentum_error
+    );
     assert!(s.energy_error < 0.05, "energy error {}", s.energy_error);
     assert!(s.min_interbody_distance.is_some_and(|g| g >= 0.5));
 }

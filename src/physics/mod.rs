@@ -109,6 +109,8 @@ pub struct Rates<const D: usize> {
     pub contact_energy: Vec<f64>,
     /// Stable time step of the particle (s).
     pub dt: Vec<f64>,
+    /// Neighbours within the support (the list may hold more, see `neighbors`).
+    pub neighbors: Vec<u32>,
     /// Smallest r_ij/Δp_avg to a neighbour of another body, in contact or welded (∞ if none):
     /// the no-mixing diagnostic.
     pub min_interbody_gap: Vec<f64>,
@@ -129,6 +131,8 @@ struct Gather<const D: usize> {
     u: Vector<D>,
     h: f64,
     m: f64,
+    /// V = m/ρ.
+    vol: f64,
     rho: f64,
     c: f64,
     /// Initial spacing Δp = h0/ratio.
@@ -161,6 +165,7 @@ pub fn compute_rates<const D: usize, K: Kernel>(
             u: p.u[i],
             h: p.h[i],
             m: p.m[i],
+            vol: p.m[i] / p.rho[i],
             rho: p.rho[i],
             c: p.c[i],
             dp: p.h0[i] / ratio,
@@ -185,6 +190,7 @@ pub fn compute_rates<const D: usize, K: Kernel>(
     out.contact_energy.resize(n, 0.0);
     out.dt.resize(n, 0.0);
     out.min_interbody_gap.resize(n, f64::INFINITY);
+    out.neighbors.resize(n, 0);
 
     let gather = &out.gather;
     let art = &out.art;
@@ -203,12 +209,16 @@ pub fn compute_rates<const D: usize, K: Kernel>(
         .zip(out.contact_energy.par_iter_mut())
         .zip(out.dt.par_iter_mut())
         .zip(out.min_interbody_gap.par_iter_mut())
+        .zip(out.neighbors.par_iter_mut())
         .enumerate();
     per_particle.for_each(
-        |(i, ((((((((acc_o, drho_o), de_o), de_lag_o), l_o), fc_o), phi_o), dt_o), gap_o))| {
+        |(
+            i,
+            (((((((((acc_o, drho_o), de_o), de_lag_o), l_o), fc_o), phi_o), dt_o), gap_o), count_o),
+        )| {
             let gi = &gather[i];
             let (xi, vi, hi, bi, rho_i, ci) = (gi.x, gi.v, gi.h, gi.body, gi.rho, gi.c);
-            let vol_i = gi.m / rho_i;
+            let vol_i = gi.vol;
             let sr2_i = gi.sr2;
             let art_i = if any_art {
                 art[i]
@@ -228,18 +238,21 @@ pub fn compute_rates<const D: usize, K: Kernel>(
             let mut mu_max = 0.0_f64;
             let mut v2_max = 0.0_f64;
             let mut gap = f64::INFINITY;
+            let mut count = 0u32;
 
             for &j in &nl.lists[i] {
                 let gj = &gather[j as usize];
                 let xij = xi - gj.x;
                 let r2 = xij.norm_squared();
-                if r2 == 0.0 {
+                let support = hi + gj.h;
+                if r2 >= support * support || r2 == 0.0 {
                     continue;
                 }
+                count += 1;
                 let r = r2.sqrt();
-                let hij = 0.5 * (hi + gj.h);
-                let dw = kernel.dw::<D>(r, hij);
-                let grad = xij * (dw / r);
+                let hij = 0.5 * support;
+                let gf = kernel.grad_factor::<D>(r, hij);
+                let grad = xij * gf;
                 let vij = vi - gj.v;
                 v2_max = v2_max.max(vij.norm_squared());
                 if gj.body != bi {
@@ -250,7 +263,7 @@ pub fn compute_rates<const D: usize, K: Kernel>(
                         let mj = gj.m;
                         let rho_j = gj.rho;
                         drho += mj * vij.dot(&grad);
-                        l -= (vij * grad.transpose()) * (mj / rho_j);
+                        l -= (vij * gj.vol) * grad.transpose();
                         let (pi, mu) = viscosity::monaghan_gingold(
                             vij.dot(&xij),
                             r2,
@@ -276,9 +289,8 @@ pub fn compute_rates<const D: usize, K: Kernel>(
                         de_lag -= 0.5 * mj * (u_i - gj.u).dot(&tg);
                     }
                     PairRule::Contact(params) => {
-                        let vol_j = gj.m / gj.rho;
                         let (coef, pot, k) =
-                            contact::pair::<D, K>(kernel, params, vol_i, vol_j, r, hij, dw);
+                            contact::pair::<D, K>(kernel, params, vol_i, gj.vol, r, hij, gf * r);
                         fc += grad * coef;
                         phi += 0.5 * pot;
                         k_contact += k;
@@ -295,6 +307,7 @@ pub fn compute_rates<const D: usize, K: Kernel>(
             *fc_o = fc;
             *phi_o = phi;
             *gap_o = gap;
+            *count_o = count;
             // Time step: sound, relative motion and viscosity (Monaghan 1992), and the contact
             // springs (ω² = Σk/m, leapfrog stable for ω Δt < 2).
             let signal = ci + v2_max.sqrt() + 0.6 * (alpha * ci + beta * mu_max);

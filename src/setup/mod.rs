@@ -179,7 +179,7 @@ fn check_overlap<const D: usize>(case: &Case, p: &Particles<D>) -> Result<()> {
         .map(|&b| 0.25 * case.bodies[b as usize].spacing)
         .collect();
     let mut nl = NeighborList::default();
-    nl.build(&p.x, &h, p.len());
+    nl.build(&p.x, &h, p.len(), 0.0);
     for i in 0..p.len() {
         for &j in &nl.lists[i] {
             let j = j as usize;
