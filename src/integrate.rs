@@ -66,7 +66,6 @@ pub fn advance<const D: usize>(
     let h0 = &p.h0[..n];
     let v_pred = &p.v[..n];
     let m_body = &model.body_prescribed;
-    let inv_d = 1.0 / D as f64;
 
     p.vh[..n]
         .par_iter_mut()
@@ -94,28 +93,29 @@ pub fn advance<const D: usize>(
                         *vh = v0;
                     }
                     None => {
-                        *a = rates.acc[i];
+                        *a = rates.particles[i].acc;
                         *vh += *a * kick;
                     }
                 }
                 *u = ((v_old + *vh) * 0.5 - v_pred[i]) * kick;
                 *x += *vh * dt;
-                *rho += rates.drho[i] * dt;
-                *eh += rates.de[i] * kick + rates.de_lag[i];
-                *e = *eh + rates.de[i] * (0.5 * dt);
+                *rho += rates.particles[i].drho * dt;
+                *eh += rates.particles[i].de * kick + rates.particles[i].de_lag;
+                *e = *eh + rates.particles[i].de * (0.5 * dt);
                 let g = mat.strength.shear_modulus();
                 if g > 0.0 {
-                    let trial = *s + jaumann_rate(s, &rates.grad_v[i], g) * dt;
+                    let trial = *s + jaumann_rate(s, &rates.particles[i].grad_v, g) * dt;
                     let (s_new, d_eps) = radial_return(&trial, *eps_p, mat.strength.as_ref());
                     *s = s_new;
                     *eps_p += d_eps;
                 }
                 // h = h0 (ρ0/ρ)^(1/D), bounded.
-                let hh = h0[i] * (mat.rho0 / *rho).powf(inv_d);
+                let ratio = mat.rho0 / *rho;
+                let hh = h0[i] * if D == 2 { ratio.sqrt() } else { ratio.cbrt() };
                 *h = hh.clamp(model.h_min_ratio * h0[i], model.h_max_ratio * h0[i]);
                 *pr = mat.pressure(*rho, *e);
                 *c = mat.sound_speed(*rho, *e);
-                *fc = rates.contact_force[i];
+                *fc = rates.particles[i].contact_force;
             },
         );
 }

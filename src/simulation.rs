@@ -145,7 +145,12 @@ impl<const D: usize> Simulation<D> {
         let n = p.n_real;
         // The stable step, its growth limited to 25 % a step; the collapse check uses it before
         // it is shortened to land on an output time.
-        let mut dt_stable = self.rates.dt.iter().copied().fold(f64::INFINITY, f64::min);
+        let mut dt_stable = self
+            .rates
+            .particles
+            .iter()
+            .map(|r| r.dt)
+            .fold(f64::INFINITY, f64::min);
         if self.dt_prev > 0.0 {
             dt_stable = dt_stable.min(1.25 * self.dt_prev);
         }
@@ -157,7 +162,12 @@ impl<const D: usize> Simulation<D> {
             time: self.time,
             dt,
             body_contact_force: vec![[0.0; 3]; self.body_names.len()],
-            interactions: self.rates.neighbors.iter().map(|&k| k as usize).sum(),
+            interactions: self
+                .rates
+                .particles
+                .iter()
+                .map(|r| r.neighbors as usize)
+                .sum(),
             max_pressure: f64::NEG_INFINITY,
             ..Default::default()
         };
@@ -167,11 +177,11 @@ impl<const D: usize> Simulation<D> {
         let (mut ke_old, mut ie_old, mut mom_old) = (0.0, 0.0, [0.0; 3]);
         for i in 0..n {
             ie_old += p.m[i] * p.eh[i];
-            d.contact += self.rates.contact_energy[i];
+            d.contact += self.rates.particles[i].contact_energy;
             d.gravity -= p.m[i] * g.dot(&p.x[i]);
             d.max_pressure = d.max_pressure.max(p.p[i]);
-            gap = gap.min(self.rates.min_interbody_gap[i]);
-            let f = to3(&self.rates.contact_force[i]);
+            gap = gap.min(self.rates.particles[i].min_interbody_gap);
+            let f = to3(&self.rates.particles[i].contact_force);
             let fb = &mut d.body_contact_force[p.body[i] as usize];
             for k in 0..3 {
                 fb[k] += f[k];
@@ -225,7 +235,7 @@ impl<const D: usize> Simulation<D> {
     /// particle may exceed the speed limit and the step must not collapse.
     fn check(&self, dt: f64, dt_stable: f64, dt_first: f64) -> Result<()> {
         let p = &self.particles;
-        let r = &self.rates;
+        let r = &self.rates.particles;
         // The state first (a bad particle spoils its neighbours' rates), then the rates.
         let state = (0..p.n_real).find_map(|i| {
             let finite = p.x[i].iter().all(|c| c.is_finite())
@@ -248,21 +258,21 @@ impl<const D: usize> Simulation<D> {
         });
         let bad = state.or_else(|| {
             (0..p.n_real).find_map(|i| {
-                if !(r.acc[i].iter().all(|c| c.is_finite())
-                    && r.drho[i].is_finite()
-                    && r.de[i].is_finite()
-                    && r.grad_v[i].iter().all(|c| c.is_finite()))
+                if !(r[i].acc.iter().all(|c| c.is_finite())
+                    && r[i].drho.is_finite()
+                    && r[i].de.is_finite()
+                    && r[i].grad_v.iter().all(|c| c.is_finite()))
                 {
                     Some((
                         i,
                         "acceleration or strain rate is not finite (NaN/inf)".to_string(),
                     ))
-                } else if p.rho[i] + dt * r.drho[i] <= 0.0 || (p.rho[i] + dt * r.drho[i]).is_nan() {
+                } else if p.rho[i] + dt * r[i].drho <= 0.0 || (p.rho[i] + dt * r[i].drho).is_nan() {
                     Some((
                         i,
                         format!(
                             "density would fall to {:.4e} kg/m³ (from {:.4e})",
-                            p.rho[i] + dt * r.drho[i],
+                            p.rho[i] + dt * r[i].drho,
                             p.rho[i]
                         ),
                     ))
@@ -275,7 +285,7 @@ impl<const D: usize> Simulation<D> {
             Some(b) => b,
             None if dt_stable < 1e-6 * dt_first || dt_stable.is_nan() => {
                 let i = (0..p.n_real)
-                    .min_by(|&a, &b| r.dt[a].total_cmp(&r.dt[b]))
+                    .min_by(|&a, &b| r[a].dt.total_cmp(&r[b].dt))
                     .unwrap_or(0);
                 (
                     i,

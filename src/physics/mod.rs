@@ -89,46 +89,55 @@ impl<const D: usize> Model<D> {
     }
 }
 
-/// Rates of change and per-particle diagnostics from one pass (indices of real particles).
-#[derive(Debug, Default, Clone)]
-pub struct Rates<const D: usize> {
+/// Rates of change and per-particle diagnostics of one real particle, from one pass.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct ParticleRates<const D: usize> {
     /// dv/dt (m/s²), contact and gravity included.
-    pub acc: Vec<Vector<D>>,
+    pub acc: Vector<D>,
     /// dρ/dt.
-    pub drho: Vec<f64>,
+    pub drho: f64,
     /// de/dt.
-    pub de: Vec<f64>,
+    pub de: f64,
     /// Lagged energy correction of the last step (J/kg), added to e as it is.
-    pub de_lag: Vec<f64>,
+    pub de_lag: f64,
     /// Velocity gradient L = ∂v/∂x.
-    pub grad_v: Vec<Tensor<D>>,
+    pub grad_v: Tensor<D>,
     /// Contact force f_c (N).
-    pub contact_force: Vec<Vector<D>>,
+    pub contact_force: Vector<D>,
     /// Half the contact potential of each of the particle's contact pairs (J): the sum over
     /// particles is Φ.
-    pub contact_energy: Vec<f64>,
+    pub contact_energy: f64,
     /// Stable time step of the particle (s).
-    pub dt: Vec<f64>,
-    /// Neighbours within the support (the list may hold more, see `neighbors`).
-    pub neighbors: Vec<u32>,
+    pub dt: f64,
     /// Smallest r_ij/Δp_avg to a neighbour of another body, in contact or welded (∞ if none):
     /// the no-mixing diagnostic.
-    pub min_interbody_gap: Vec<f64>,
+    pub min_interbody_gap: f64,
+    /// Neighbours within the support (the list may hold more, see `neighbors`).
+    pub neighbors: u32,
+}
+
+/// The pass's output (one record per real particle) and its work buffers.
+#[derive(Debug, Default, Clone)]
+pub struct Rates<const D: usize> {
+    pub particles: Vec<ParticleRates<D>>,
     /// What the pass reads of each neighbour (all particles, ghosts included), packed into one
     /// record so that a neighbour costs one bounds check and few cache lines.
     gather: Vec<Gather<D>>,
-    /// Per-particle artificial stress R (all particles, ghosts included).
+    /// Per-particle artificial stress R (all particles, ghosts included; empty when no
+    /// material uses it).
     art: Vec<Tensor<D>>,
 }
 
-/// A particle as its neighbours see it in the pass.
+/// A particle as its neighbours see it in the pass, in plain arrays: the pair loop is the
+/// hot spot of the code, and fixed-size loops over `D` compile to straight-line arithmetic
+/// (half the instructions of the same sums on nalgebra's generic small matrices).
 #[derive(Debug, Clone, Copy)]
 struct Gather<const D: usize> {
-    /// σ/ρ².
-    sr2: Tensor<D>,
-    x: Vector<D>,
-    v: Vector<D>,
-    u: Vector<D>,
+    /// σ/ρ², row by row.
+    sr2: [[f64; D]; D],
+    x: [f64; D],
+    v: [f64; D],
+    u: [f64; D],
     h: f64,
     m: f64,
     /// V = m/ρ.
@@ -140,6 +149,20 @@ struct Gather<const D: usize> {
     body: u32,
 }
 
+#[inline(always)]
+fn arr<const D: usize>(v: &Vector<D>) -> [f64; D] {
+    std::array::from_fn(|k| v[k])
+}
+
+#[inline(always)]
+fn dot<const D: usize>(a: &[f64; D], b: &[f64; D]) -> f64 {
+    let mut s = 0.0;
+    for k in 0..D {
+        s += a[k] * b[k];
+    }
+    s
+}
+
 /// Evaluate all rates at the particles' current state (positions, velocities `p.v`, stress).
 pub fn compute_rates<const D: usize, K: Kernel>(
     kernel: K,
@@ -148,7 +171,6 @@ pub fn compute_rates<const D: usize, K: Kernel>(
     model: &Model<D>,
     out: &mut Rates<D>,
 ) {
-    let n = p.n_real;
     let all = p.len();
     let ratio = model.smoothing_ratio;
     let any_art = model
@@ -157,12 +179,12 @@ pub fn compute_rates<const D: usize, K: Kernel>(
         .any(|m| m.artificial_stress.is_some());
     out.gather.clear();
     out.gather.par_extend((0..all).into_par_iter().map(|i| {
-        let sigma = p.stress(i);
+        let sr2 = p.stress(i) / (p.rho[i] * p.rho[i]);
         Gather {
-            sr2: sigma / (p.rho[i] * p.rho[i]),
-            x: p.x[i],
-            v: p.v[i],
-            u: p.u[i],
+            sr2: std::array::from_fn(|a| std::array::from_fn(|b| sr2[(a, b)])),
+            x: arr(&p.x[i]),
+            v: arr(&p.v[i]),
+            u: arr(&p.u[i]),
             h: p.h[i],
             m: p.m[i],
             vol: p.m[i] / p.rho[i],
@@ -181,141 +203,143 @@ pub fn compute_rates<const D: usize, K: Kernel>(
             }
         }));
     }
-    out.acc.resize(n, Vector::<D>::zeros());
-    out.drho.resize(n, 0.0);
-    out.de.resize(n, 0.0);
-    out.de_lag.resize(n, 0.0);
-    out.grad_v.resize(n, Tensor::<D>::zeros());
-    out.contact_force.resize(n, Vector::<D>::zeros());
-    out.contact_energy.resize(n, 0.0);
-    out.dt.resize(n, 0.0);
-    out.min_interbody_gap.resize(n, f64::INFINITY);
-    out.neighbors.resize(n, 0);
+    let (gather, art) = (&out.gather, &out.art);
+    out.particles.clear();
+    out.particles.par_extend(
+        (0..p.n_real)
+            .into_par_iter()
+            .map(|i| particle_rates(kernel, i, &nl.lists[i], gather, art, model)),
+    );
+}
 
-    let gather = &out.gather;
-    let art = &out.art;
+/// One real particle's sums over its neighbours (see the module doc for the equations).
+#[inline(always)]
+fn particle_rates<const D: usize, K: Kernel>(
+    kernel: K,
+    i: usize,
+    neighbors: &[u32],
+    gather: &[Gather<D>],
+    art: &[Tensor<D>],
+    model: &Model<D>,
+) -> ParticleRates<D> {
+    let gi = &gather[i];
+    let (xi, vi, ui, hi, bi, rho_i, ci) = (gi.x, gi.v, gi.u, gi.h, gi.body, gi.rho, gi.c);
     let (alpha, beta) = (model.alpha, model.beta);
-    let gravity = model.gravity;
-    let cfl = model.cfl;
+    let art_i = art.get(i).copied();
 
-    let per_particle = out
-        .acc
-        .par_iter_mut()
-        .zip(out.drho.par_iter_mut())
-        .zip(out.de.par_iter_mut())
-        .zip(out.de_lag.par_iter_mut())
-        .zip(out.grad_v.par_iter_mut())
-        .zip(out.contact_force.par_iter_mut())
-        .zip(out.contact_energy.par_iter_mut())
-        .zip(out.dt.par_iter_mut())
-        .zip(out.min_interbody_gap.par_iter_mut())
-        .zip(out.neighbors.par_iter_mut())
-        .enumerate();
-    per_particle.for_each(
-        |(
-            i,
-            (((((((((acc_o, drho_o), de_o), de_lag_o), l_o), fc_o), phi_o), dt_o), gap_o), count_o),
-        )| {
-            let gi = &gather[i];
-            let (xi, vi, hi, bi, rho_i, ci) = (gi.x, gi.v, gi.h, gi.body, gi.rho, gi.c);
-            let vol_i = gi.vol;
-            let sr2_i = gi.sr2;
-            let art_i = if any_art {
-                art[i]
-            } else {
-                Tensor::<D>::zeros()
-            };
-            let u_i = gi.u;
+    let mut acc = [0.0; D];
+    let mut fc = [0.0; D];
+    let mut l = [[0.0; D]; D];
+    let mut drho = 0.0;
+    let mut de = 0.0;
+    let mut de_lag = 0.0;
+    let mut phi = 0.0;
+    let mut k_contact = 0.0;
+    let mut mu_max = 0.0_f64;
+    let mut v2_max = 0.0_f64;
+    let mut gap = f64::INFINITY;
+    let mut count = 0u32;
 
-            let mut acc = Vector::<D>::zeros();
-            let mut fc = Vector::<D>::zeros();
-            let mut l = Tensor::<D>::zeros();
-            let mut drho = 0.0;
-            let mut de = 0.0;
-            let mut de_lag = 0.0;
-            let mut phi = 0.0;
-            let mut k_contact = 0.0;
-            let mut mu_max = 0.0_f64;
-            let mut v2_max = 0.0_f64;
-            let mut gap = f64::INFINITY;
-            let mut count = 0u32;
-
-            for &j in &nl.lists[i] {
-                let gj = &gather[j as usize];
-                let xij = xi - gj.x;
-                let r2 = xij.norm_squared();
-                let support = hi + gj.h;
-                if r2 >= support * support || r2 == 0.0 {
-                    continue;
+    for &j in neighbors {
+        let gj = &gather[j as usize];
+        let xij: [f64; D] = std::array::from_fn(|k| xi[k] - gj.x[k]);
+        let r2 = dot(&xij, &xij);
+        let support = hi + gj.h;
+        if r2 >= support * support || r2 == 0.0 {
+            continue;
+        }
+        count += 1;
+        let r = r2.sqrt();
+        let hij = 0.5 * support;
+        let gf = kernel.grad_factor::<D>(r, hij);
+        let grad: [f64; D] = std::array::from_fn(|k| xij[k] * gf);
+        let vij: [f64; D] = std::array::from_fn(|k| vi[k] - gj.v[k]);
+        v2_max = v2_max.max(dot(&vij, &vij));
+        if gj.body != bi {
+            gap = gap.min(r / (0.5 * (gi.dp + gj.dp)));
+        }
+        match model.pairs.rule(bi, gj.body) {
+            PairRule::Conserve => {
+                let mj = gj.m;
+                drho += mj * dot(&vij, &grad);
+                for a in 0..D {
+                    let va = vij[a] * gj.vol;
+                    for b in 0..D {
+                        l[a][b] -= va * grad[b];
+                    }
                 }
-                count += 1;
-                let r = r2.sqrt();
-                let hij = 0.5 * support;
-                let gf = kernel.grad_factor::<D>(r, hij);
-                let grad = xij * gf;
-                let vij = vi - gj.v;
-                v2_max = v2_max.max(vij.norm_squared());
-                if gj.body != bi {
-                    gap = gap.min(r / (0.5 * (gi.dp + gj.dp)));
-                }
-                match model.pairs.rule(bi, gj.body) {
-                    PairRule::Conserve => {
-                        let mj = gj.m;
-                        let rho_j = gj.rho;
-                        drho += mj * vij.dot(&grad);
-                        l -= (vij * gj.vol) * grad.transpose();
-                        let (pi, mu) = viscosity::monaghan_gingold(
-                            vij.dot(&xij),
-                            r2,
-                            hij,
-                            0.5 * (ci + gj.c),
-                            0.5 * (rho_i + rho_j),
-                            alpha,
-                            beta,
-                        );
-                        mu_max = mu_max.max(-mu);
-                        let mut t = sr2_i + gj.sr2;
-                        if any_art {
-                            let a = art_i + art[j as usize];
-                            if a != Tensor::<D>::zeros() {
-                                let dp = 0.5 * (gi.dp + gj.dp);
-                                let f = kernel.w::<D>(r, hij) / kernel.w::<D>(dp, hij);
-                                t += a * f.powi(artificial_stress::EXPONENT);
+                let (pi, mu) = viscosity::monaghan_gingold(
+                    dot(&vij, &xij),
+                    r2,
+                    hij,
+                    0.5 * (ci + gj.c),
+                    0.5 * (rho_i + gj.rho),
+                    alpha,
+                    beta,
+                );
+                mu_max = mu_max.max(-mu);
+                // T_ij ∇W = (σ_i/ρ_i² + σ_j/ρ_j²) ∇W − Π_ij ∇W (+ A_ij ∇W).
+                let mut tg: [f64; D] = std::array::from_fn(|a| {
+                    let mut t = -pi * grad[a];
+                    for b in 0..D {
+                        t += (gi.sr2[a][b] + gj.sr2[a][b]) * grad[b];
+                    }
+                    t
+                });
+                if let Some(art_i) = art_i {
+                    let r_ij = art_i + art[j as usize];
+                    if r_ij != Tensor::<D>::zeros() {
+                        let dp = 0.5 * (gi.dp + gj.dp);
+                        let f = kernel.w::<D>(r, hij) / kernel.w::<D>(dp, hij);
+                        let fa = f.powi(artificial_stress::EXPONENT);
+                        for a in 0..D {
+                            for b in 0..D {
+                                tg[a] += r_ij[(a, b)] * fa * grad[b];
                             }
                         }
-                        let tg = t * grad - grad * pi;
-                        acc += tg * mj;
-                        de -= 0.5 * mj * vij.dot(&tg);
-                        de_lag -= 0.5 * mj * (u_i - gj.u).dot(&tg);
-                    }
-                    PairRule::Contact(params) => {
-                        let (coef, pot, k) =
-                            contact::pair::<D, K>(kernel, params, vol_i, gj.vol, r, hij, gf * r);
-                        fc += grad * coef;
-                        phi += 0.5 * pot;
-                        k_contact += k;
                     }
                 }
+                let mut vtg = 0.0;
+                let mut utg = 0.0;
+                for a in 0..D {
+                    acc[a] += tg[a] * mj;
+                    vtg += vij[a] * tg[a];
+                    utg += (ui[a] - gj.u[a]) * tg[a];
+                }
+                de -= 0.5 * mj * vtg;
+                de_lag -= 0.5 * mj * utg;
             }
+            PairRule::Contact(params) => {
+                let (coef, pot, k) =
+                    contact::pair::<D, K>(kernel, params, gi.vol, gj.vol, r, hij, gf * r);
+                for a in 0..D {
+                    fc[a] += grad[a] * coef;
+                }
+                phi += 0.5 * pot;
+                k_contact += k;
+            }
+        }
+    }
 
-            let mi = gi.m;
-            *acc_o = acc + fc / mi + gravity;
-            *drho_o = drho;
-            *de_o = de;
-            *de_lag_o = de_lag;
-            *l_o = l;
-            *fc_o = fc;
-            *phi_o = phi;
-            *gap_o = gap;
-            *count_o = count;
-            // Time step: sound, relative motion and viscosity (Monaghan 1992), and the contact
-            // springs (ω² = Σk/m, leapfrog stable for ω Δt < 2).
-            let signal = ci + v2_max.sqrt() + 0.6 * (alpha * ci + beta * mu_max);
-            let mut dt = cfl * hi / signal;
-            if k_contact > 0.0 {
-                dt = dt.min(cfl * 2.0 * (mi / k_contact).sqrt());
-            }
-            *dt_o = dt;
-        },
-    );
+    let mi = gi.m;
+    let fc = Vector::<D>::from_fn(|k, _| fc[k]);
+    // Time step: sound, relative motion and viscosity (Monaghan 1992), and the contact springs
+    // (ω² = Σk/m, leapfrog stable for ω Δt < 2).
+    let signal = ci + v2_max.sqrt() + 0.6 * (alpha * ci + beta * mu_max);
+    let mut dt = model.cfl * hi / signal;
+    if k_contact > 0.0 {
+        dt = dt.min(model.cfl * 2.0 * (mi / k_contact).sqrt());
+    }
+    ParticleRates {
+        acc: Vector::<D>::from_fn(|k, _| acc[k]) + fc / mi + model.gravity,
+        drho,
+        de,
+        de_lag,
+        grad_v: Tensor::<D>::from_fn(|a, b| l[a][b]),
+        contact_force: fc,
+        contact_energy: phi,
+        dt,
+        min_interbody_gap: gap,
+        neighbors: count,
+    }
 }
