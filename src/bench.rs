@@ -179,16 +179,28 @@ fn measure_dim<const D: usize>(
     })
 }
 
-/// The standard benchmark: every case on 1 thread and on all cores, plus the million-particle
-/// memory case on all cores. `quick` runs fewer steps (for a smoke test).
+/// The standard benchmark. First the scaling series on all cores — cubes of 100³ (the
+/// million-particle memory figure, measured first while the process is fresh), 50³ and 25³
+/// particles — then every fixed case on 1 thread and on all cores. `quick` runs fewer steps and
+/// smaller cubes (a smoke test).
 pub fn run_all(quick: bool) -> Result<BenchReport> {
     let all = std::thread::available_parallelism().map_or(1, |n| n.get());
     let mut threads = vec![1];
     if all > 1 {
         threads.push(all);
     }
-    let (warm, steps) = if quick { (1, 2) } else { (5, 40) };
     let mut cases = Vec::new();
+    let sizes: &[(usize, u64)] = if quick {
+        &[(20, 1), (10, 1)]
+    } else {
+        &[(100, 3), (50, 10), (25, 40)]
+    };
+    for &(n, steps) in sizes {
+        let c = measure(&cube_deck(n), "bench:cube", all, 1, steps)?;
+        eprintln!("{}", line(&c));
+        cases.push(c);
+    }
+    let (warm, steps) = if quick { (1, 2) } else { (5, 60) };
     let decks: [(&str, &str, u64); 3] = [
         (CUBES_3D, "bench:cubes_3d", steps),
         (SPHERE_PLATE, "bench:sphere_plate", steps / 2),
@@ -201,10 +213,6 @@ pub fn run_all(quick: bool) -> Result<BenchReport> {
             cases.push(c);
         }
     }
-    let big = if quick { cube_deck(30) } else { cube_deck(100) };
-    let c = measure(&big, "bench:cube_large", all, 1, if quick { 1 } else { 3 })?;
-    eprintln!("{}", line(&c));
-    cases.push(c);
     Ok(BenchReport { cases })
 }
 

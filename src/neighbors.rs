@@ -45,9 +45,15 @@ pub struct NeighborList {
     /// cell, with its key in `cell_key`.
     cell_start: Vec<u32>,
     cell_key: Vec<u64>,
+    /// Next free slot of each cell during the counting sort.
+    fill: Vec<u32>,
     /// Cell coordinates of each particle, and (sparse) key-index pairs for sorting.
     coords: Vec<[i64; 3]>,
     keyed: Vec<(u64, u32)>,
+    /// Positions and support radii (h + skin/2) in cell order, so that scanning a run of
+    /// candidates reads memory in sequence.
+    xs: Vec<Vector<3>>,
+    hs: Vec<f64>,
     /// Skin of the last build, and the positions and smoothing lengths it was built for.
     skin: f64,
     x_built: Vec<f64>,
@@ -143,6 +149,18 @@ impl NeighborList {
             return;
         }
         let grid = self.bin(x, h, skin);
+        self.xs.clear();
+        self.xs.par_extend(self.sorted.par_iter().map(|&j| {
+            let mut p = Vector::<3>::zeros();
+            for k in 0..D {
+                p[k] = x[j as usize][k];
+            }
+            p
+        }));
+        self.hs.clear();
+        self.hs
+            .par_extend(self.sorted.par_iter().map(|&j| h[j as usize] + 0.5 * skin));
+        let (xs, hs) = (&self.xs, &self.hs);
         let sorted = &self.sorted;
         let cell_start = &self.cell_start;
         let cell_key = &self.cell_key;
@@ -151,17 +169,20 @@ impl NeighborList {
         self.lists.par_iter_mut().enumerate().for_each(|(i, list)| {
             list.clear();
             let xi = x[i];
-            let hi = h[i];
+            let hi = h[i] + 0.5 * skin;
             let c = coords[i];
             // Runs along the last axis for every offset of the other axes.
             let lo_last = (c[last] - REACH).max(0);
             let hi_last = (c[last] + REACH).min(grid.dims[last] - 1);
+            let mut xi3 = Vector::<3>::zeros();
+            for k in 0..D {
+                xi3[k] = xi[k];
+            }
             let mut visit = |a: usize, b: usize| {
-                for &j in &sorted[a..b] {
-                    let j = j as usize;
-                    let support = hi + h[j] + skin;
-                    if j != i && (xi - x[j]).norm_squared() < support * support {
-                        list.push(j as u32);
+                for k in a..b {
+                    let support = hi + hs[k];
+                    if (xi3 - xs[k]).norm_squared() < support * support && sorted[k] as usize != i {
+                        list.push(sorted[k]);
                     }
                 }
             };
@@ -245,9 +266,10 @@ impl NeighborList {
                 self.cell_start[k + 1] += self.cell_start[k];
             }
             self.sorted.resize(n, 0);
-            let mut fill = self.cell_start[..cells].to_vec();
+            self.fill.clear();
+            self.fill.extend_from_slice(&self.cell_start[..cells]);
             for (i, c) in self.coords.iter().enumerate() {
-                let slot = &mut fill[grid.index(*c)];
+                let slot = &mut self.fill[grid.index(*c)];
                 self.sorted[*slot as usize] = i as u32;
                 *slot += 1;
             }

@@ -14,10 +14,9 @@ pub fn monaghan_gingold(
     alpha: f64,
     beta: f64,
 ) -> (f64, f64) {
-    if vdotx >= 0.0 {
-        return (0.0, 0.0);
-    }
-    let mu = h * vdotx / (r2 + 0.01 * h * h);
+    // Branch-free: μ = 0 for separating pairs gives Π = 0 (the sign of v_ij·x_ij is close to
+    // random from pair to pair, and a mispredicted branch costs more than the arithmetic).
+    let mu = h * vdotx.min(0.0) / (r2 + 0.01 * h * h);
     ((-alpha * c_mean * mu + beta * mu * mu) / rho_mean, mu)
 }
 
