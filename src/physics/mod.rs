@@ -281,8 +281,8 @@ fn particle_rates<const D: usize, K: Kernel>(
                 // T_ij ∇W = (σ_i/ρ_i² + σ_j/ρ_j²) ∇W − Π_ij ∇W (+ A_ij ∇W).
                 let mut tg: [f64; D] = std::array::from_fn(|a| {
                     let mut t = -pi * grad[a];
-                    for b in 0..D {
-                        t += (gi.sr2[a][b] + gj.sr2[a][b]) * grad[b];
+                    for (b, g) in grad.iter().enumerate() {
+                        t += (gi.sr2[a][b] + gj.sr2[a][b]) * g;
                     }
                     t
                 });
