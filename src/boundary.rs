@@ -53,7 +53,7 @@ impl Ghosts {
         let n = p.n_real;
         for (k, &(src, pi)) in self.map.iter().enumerate() {
             let g = n + k;
-            copy_state(p, src, g);
+            p.copy(src, g);
             mirror(p, g, planes[pi].axis, planes[pi].position);
         }
     }
@@ -63,27 +63,6 @@ impl Ghosts {
 pub fn rebuild_ghosts<const D: usize>(p: &mut Particles<D>, planes: &[Plane]) {
     let reach = 2.0 * p.h.iter().copied().fold(0.0_f64, f64::max);
     Ghosts::default().rebuild(p, planes, reach);
-}
-
-fn copy_state<const D: usize>(p: &mut Particles<D>, src: usize, g: usize) {
-    p.x[g] = p.x[src];
-    p.v[g] = p.v[src];
-    p.vh[g] = p.vh[src];
-    p.a[g] = p.a[src];
-    p.u[g] = p.u[src];
-    p.m[g] = p.m[src];
-    p.rho[g] = p.rho[src];
-    p.e[g] = p.e[src];
-    p.eh[g] = p.eh[src];
-    p.p[g] = p.p[src];
-    p.c[g] = p.c[src];
-    p.s[g] = p.s[src];
-    p.h[g] = p.h[src];
-    p.h0[g] = p.h0[src];
-    p.eps_p[g] = p.eps_p[src];
-    p.body[g] = p.body[src];
-    p.id[g] = p.id[src];
-    p.contact_force[g] = p.contact_force[src];
 }
 
 fn mirror<const D: usize>(p: &mut Particles<D>, g: usize, k: usize, c: f64) {

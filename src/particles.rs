@@ -10,6 +10,34 @@ pub type Vector<const D: usize> = SVector<f64, D>;
 /// A D×D tensor (stress, velocity gradient).
 pub type Tensor<const D: usize> = SMatrix<f64, D, D>;
 
+/// Calls `$m!(field, …)` with every per-particle field of [`Particles`]: the one list that the
+/// whole-particle operations (copy, truncate, reorder) go through, so a new field cannot be
+/// forgotten in one of them.
+macro_rules! for_each_field {
+    ($m:ident) => {
+        $m!(
+            x,
+            v,
+            vh,
+            a,
+            u,
+            m,
+            rho,
+            e,
+            eh,
+            p,
+            c,
+            s,
+            h,
+            h0,
+            eps_p,
+            body,
+            id,
+            contact_force
+        )
+    };
+}
+
 /// Per-particle state. Indices are particle numbers; `id` follows a particle through reordering.
 #[derive(Debug, Clone, Default)]
 pub struct Particles<const D: usize> {
@@ -104,47 +132,27 @@ impl<const D: usize> Particles<D> {
     /// Drop ghosts, keeping the real particles.
     pub fn truncate_to_real(&mut self) {
         let n = self.n_real;
-        self.x.truncate(n);
-        self.v.truncate(n);
-        self.vh.truncate(n);
-        self.a.truncate(n);
-        self.u.truncate(n);
-        self.m.truncate(n);
-        self.rho.truncate(n);
-        self.e.truncate(n);
-        self.eh.truncate(n);
-        self.p.truncate(n);
-        self.c.truncate(n);
-        self.s.truncate(n);
-        self.h.truncate(n);
-        self.h0.truncate(n);
-        self.eps_p.truncate(n);
-        self.body.truncate(n);
-        self.id.truncate(n);
-        self.contact_force.truncate(n);
+        macro_rules! truncate {
+            ($($f:ident),*) => { $(self.$f.truncate(n);)* };
+        }
+        for_each_field!(truncate);
     }
 
     /// Append a copy of particle `i` (used for ghosts); returns its index.
     pub fn push_copy(&mut self, i: usize) -> usize {
-        self.x.push(self.x[i]);
-        self.v.push(self.v[i]);
-        self.vh.push(self.vh[i]);
-        self.a.push(self.a[i]);
-        self.u.push(self.u[i]);
-        self.m.push(self.m[i]);
-        self.rho.push(self.rho[i]);
-        self.e.push(self.e[i]);
-        self.eh.push(self.eh[i]);
-        self.p.push(self.p[i]);
-        self.c.push(self.c[i]);
-        self.s.push(self.s[i]);
-        self.h.push(self.h[i]);
-        self.h0.push(self.h0[i]);
-        self.eps_p.push(self.eps_p[i]);
-        self.body.push(self.body[i]);
-        self.id.push(self.id[i]);
-        self.contact_force.push(self.contact_force[i]);
+        macro_rules! push {
+            ($($f:ident),*) => { $(self.$f.push(self.$f[i]);)* };
+        }
+        for_each_field!(push);
         self.x.len() - 1
+    }
+
+    /// Copy every field of particle `src` onto particle `dst`.
+    pub fn copy(&mut self, src: usize, dst: usize) {
+        macro_rules! copy {
+            ($($f:ident),*) => { $(self.$f[dst] = self.$f[src];)* };
+        }
+        for_each_field!(copy);
     }
 
     /// Reorder real particles by `order` (new position k holds old particle order[k]).
@@ -154,24 +162,10 @@ impl<const D: usize> Particles<D> {
             v.extend(order.iter().map(|&k| old[k]));
         }
         self.truncate_to_real();
-        apply(&mut self.x, order);
-        apply(&mut self.v, order);
-        apply(&mut self.vh, order);
-        apply(&mut self.a, order);
-        apply(&mut self.u, order);
-        apply(&mut self.m, order);
-        apply(&mut self.rho, order);
-        apply(&mut self.e, order);
-        apply(&mut self.eh, order);
-        apply(&mut self.p, order);
-        apply(&mut self.c, order);
-        apply(&mut self.s, order);
-        apply(&mut self.h, order);
-        apply(&mut self.h0, order);
-        apply(&mut self.eps_p, order);
-        apply(&mut self.body, order);
-        apply(&mut self.id, order);
-        apply(&mut self.contact_force, order);
+        macro_rules! permute {
+            ($($f:ident),*) => { $(apply(&mut self.$f, order);)* };
+        }
+        for_each_field!(permute);
     }
 
     /// Position as a 3-vector (z = 0 in 2D), for output.
