@@ -29,9 +29,14 @@ enum Command {
         /// Worker threads (default: all cores).
         #[arg(long)]
         threads: Option<usize>,
-        /// Stop after this many steps.
+        /// Stop after this many steps (in all, a resumed run's earlier steps included).
         #[arg(long)]
         max_steps: Option<u64>,
+        /// Go on from a checkpoint (`checkpoint.bin` in an earlier run's output directory,
+        /// written with every snapshot and when a run stops); history and snapshots continue
+        /// in the output directory.
+        #[arg(long)]
+        resume: Option<PathBuf>,
     },
     /// Benchmark built-in cases (1 thread and all cores) and write bench.json.
     Bench {
@@ -76,10 +81,15 @@ fn main_inner() -> Result<(), Report> {
             out,
             threads,
             max_steps,
+            resume,
         } => {
             set_threads(threads)?;
             let c = load(&case)?;
-            let out_dir = out.unwrap_or_else(|| Path::new("runs").join(&c.name));
+            // A resumed run continues in its checkpoint's directory unless told otherwise.
+            let out_dir = out.unwrap_or_else(|| match resume.as_deref().and_then(Path::parent) {
+                Some(dir) if !dir.as_os_str().is_empty() => dir.to_path_buf(),
+                _ => Path::new("runs").join(&c.name),
+            });
             tracing::info!(
                 "running {} ({}D) into {} on {} threads",
                 case.display(),
@@ -92,6 +102,7 @@ fn main_inner() -> Result<(), Report> {
                 progress: std::io::stderr().is_terminal(),
                 max_steps,
                 write_fields: true,
+                resume,
             };
             let summary = run::run(&c, &opts).map_err(|e| report(e, &case))?;
             println!("{}", check::summary_text(&summary));

@@ -39,7 +39,7 @@ macro_rules! for_each_field {
 }
 
 /// Per-particle state. Indices are particle numbers; `id` follows a particle through reordering.
-#[derive(Debug, Clone, Default)]
+#[derive(Debug, Clone, Default, PartialEq, serde::Serialize, serde::Deserialize)]
 pub struct Particles<const D: usize> {
     /// Position x (m).
     pub x: Vec<Vector<D>>,

@@ -1,9 +1,11 @@
 //! One run of a case, start to end: the time loop of [`Simulation`] with everything a user
 //! sees around it — snapshots (.vtp + .pvd), `history.csv`, cross-section pictures, the history
-//! plot, `summary.json`, a progress bar or log lines. Output reads particles, never changes them.
+//! plot, `summary.json`, `checkpoint.bin`, a progress bar or log lines. Output reads particles,
+//! never changes them.
 
 use crate::case::{Case, ColorBy, PictureSpec};
 use crate::error::{Error, Result};
+use crate::output::checkpoint::{Checkpoint, RunState, Tally};
 use crate::output::history::{History, HistoryWriter};
 use crate::output::picture::{self, SectionFrame};
 use crate::output::summary::Summary;
@@ -19,14 +21,17 @@ pub struct RunOptions {
     pub out_dir: PathBuf,
     /// Show a progress bar (on a terminal) instead of log lines.
     pub progress: bool,
-    /// Stop after this many steps (overrides the deck's max_steps when smaller).
+    /// Stop after this many steps in all (overrides the deck's max_steps when smaller).
     pub max_steps: Option<u64>,
-    /// Write snapshots, pictures and plots (false: history and summary only, for tests).
+    /// Write snapshots, pictures, plots and checkpoints (false: history and summary only).
     pub write_fields: bool,
+    /// Go on from this checkpoint (written by a run of the same case).
+    pub resume: Option<PathBuf>,
 }
 
 /// Run a case; the summary is also written to `summary.json`. A run that goes unstable writes
-/// its last good snapshot and a summary whose `status` gives the cause, then returns the error.
+/// its last good snapshot, a checkpoint of it and a summary whose `status` gives the cause, then
+/// returns the error.
 pub fn run(case: &Case, opts: &RunOptions) -> Result<Summary> {
     match case.dimension {
         2 => run_dim::<2>(case, opts),
@@ -35,26 +40,21 @@ pub fn run(case: &Case, opts: &RunOptions) -> Result<Summary> {
     }
 }
 
-/// Running totals for the summary.
-struct Tally {
-    /// Momentum components that no symmetry plane acts on (a plane pushes along its normal).
-    conserved: [bool; 3],
-    e0: Option<f64>,
-    p0: [f64; 3],
-    energy_scale: f64,
-    energy_dev: f64,
-    gravity0: f64,
-    momentum_dev: f64,
-    momentum_scale: f64,
-    min_gap: Option<f64>,
-    interactions: u128,
-    last: Diagnostics,
-}
-
 impl Tally {
+    fn new(case: &Case) -> Self {
+        let mut conserved = [true; 3];
+        for plane in &case.symmetry {
+            conserved[plane.axis] = false;
+        }
+        Tally {
+            conserved,
+            ..Default::default()
+        }
+    }
+
     fn add(&mut self, d: &Diagnostics) {
         let e0 = *self.e0.get_or_insert(d.total);
-        if self.last.time == 0.0 && self.interactions == 0 {
+        if self.interactions == 0 {
             self.p0 = d.momentum;
             self.gravity0 = d.gravity;
             self.momentum_scale = d.momentum_scale;
@@ -77,6 +77,81 @@ impl Tally {
     }
 }
 
+/// A run in progress: the simulation and its outputs.
+struct Run<'a, const D: usize> {
+    case: &'a Case,
+    opts: &'a RunOptions,
+    sim: Simulation<D>,
+    history: HistoryWriter,
+    pvd: PvdWriter,
+    state: RunState,
+    last_snapshot: Option<u64>,
+    /// Wall time of this process's part of the run.
+    start: Instant,
+}
+
+impl<const D: usize> Run<'_, D> {
+    fn out(&self, name: &str) -> PathBuf {
+        self.opts.out_dir.join(name)
+    }
+
+    /// Snapshot (and checkpoint) of the current state, once per step.
+    fn snapshot(&mut self) -> Result<()> {
+        if !self.opts.write_fields || self.last_snapshot == Some(self.sim.step) {
+            return Ok(());
+        }
+        self.last_snapshot = Some(self.sim.step);
+        let name = format!("{}_{:06}.vtp", self.case.name, self.sim.step);
+        vtk::write_snapshot(&self.out(&name), &self.sim.particles, self.sim.time)?;
+        self.pvd.add(self.sim.time, &name)?;
+        self.checkpoint()
+    }
+
+    fn checkpoint(&mut self) -> Result<()> {
+        let (particles, sim) = self.sim.checkpoint_state();
+        let mut run = self.state.clone();
+        run.snapshots = self.pvd.entries().to_vec();
+        run.history_len = self.history.len();
+        run.wall_seconds += self.start.elapsed().as_secs_f64();
+        let c = Checkpoint::<D> {
+            format: crate::output::checkpoint::FORMAT,
+            case: self.case.name.clone(),
+            particles,
+            sim,
+            run,
+        };
+        c.write(&self.out("checkpoint.bin"))
+    }
+
+    /// Cross sections due at the current time.
+    fn take_pictures(&mut self) {
+        let tol = 1e-9 * self.case.simulation.end_time;
+        while let Some(&(k, t)) = self.state.pending_pictures.first() {
+            if t > self.sim.time + tol {
+                break;
+            }
+            let spec = &self.case.output.pictures[k];
+            let thickness = section_thickness(self.case, spec);
+            self.state.frames[k].push(picture::extract_section(
+                &self.sim.particles,
+                self.sim.time,
+                spec,
+                thickness,
+            ));
+            self.state.pending_pictures.remove(0);
+        }
+    }
+}
+
+fn section_thickness(case: &Case, spec: &PictureSpec) -> f64 {
+    spec.thickness.unwrap_or_else(|| {
+        case.bodies
+            .iter()
+            .map(|b| b.spacing)
+            .fold(f64::INFINITY, f64::min)
+    })
+}
+
 fn run_dim<const D: usize>(case: &Case, opts: &RunOptions) -> Result<Summary> {
     let out = &opts.out_dir;
     std::fs::create_dir_all(out).map_err(|e| Error::io(out, e))?;
@@ -87,123 +162,116 @@ fn run_dim<const D: usize>(case: &Case, opts: &RunOptions) -> Result<Summary> {
         (Some(a), Some(b)) => Some(a.min(b)),
         (a, b) => a.or(b),
     };
-
-    let mut history = HistoryWriter::create(&out.join("history.csv"), &sim.body_names)?;
-    let mut pvd = PvdWriter::new(&out.join(format!("{}.pvd", case.name)));
-    let mut last_snapshot = None;
-    let mut snapshot = |sim: &Simulation<D>, pvd: &mut PvdWriter| -> Result<()> {
-        if !opts.write_fields || last_snapshot == Some(sim.step) {
-            return Ok(());
-        }
-        last_snapshot = Some(sim.step);
-        let name = format!("{}_{:06}.vtp", case.name, sim.step);
-        vtk::write_snapshot(&out.join(&name), &sim.particles, sim.time)?;
-        pvd.add(sim.time, &name)
-    };
-    snapshot(&sim, &mut pvd)?;
-
-    // Output events: snapshot times and picture times; steps are shortened to land on them.
     let interval = case.output.snapshot_interval;
-    let mut next_snapshot = interval.unwrap_or(f64::INFINITY);
-    let mut picture_times: Vec<(usize, f64)> = case
-        .output
-        .pictures
-        .iter()
-        .enumerate()
-        .flat_map(|(k, p)| p.times.iter().map(move |&t| (k, t)))
-        .collect();
-    picture_times.sort_by(|a, b| a.1.total_cmp(&b.1));
-    let mut frames: Vec<Vec<SectionFrame>> = vec![Vec::new(); case.output.pictures.len()];
-    let thickness = |spec: &PictureSpec| {
-        spec.thickness.unwrap_or_else(|| {
-            case.bodies
-                .iter()
-                .map(|b| b.spacing)
-                .fold(f64::INFINITY, f64::min)
-        })
-    };
-    let tol = 1e-9 * end;
-    let mut take_pictures = |sim: &Simulation<D>, pending: &mut Vec<(usize, f64)>| {
-        while let Some(&(k, t)) = pending.first() {
-            if t > sim.time + tol {
-                break;
+    let pvd_path = out.join(format!("{}.pvd", case.name));
+    let history_path = out.join("history.csv");
+
+    let (state, history, pvd) = match &opts.resume {
+        Some(path) => {
+            let c = Checkpoint::<D>::read(path, &case.name)?;
+            if c.particles.n_real != n {
+                return Err(Error::Invalid(format!(
+                    "{}: the checkpoint has {} particles, the deck makes {n}: the deck changed since",
+                    path.display(),
+                    c.particles.n_real
+                )));
             }
-            let spec = &case.output.pictures[k];
-            frames[k].push(picture::extract_section(
-                &sim.particles,
-                sim.time,
-                spec,
-                thickness(spec),
-            ));
-            pending.remove(0);
+            sim.restore(c.particles, c.sim);
+            let pvd = PvdWriter::resume(&pvd_path, c.run.snapshots.clone());
+            let history = HistoryWriter::append(&history_path, c.run.history_len)?;
+            (c.run, history, pvd)
+        }
+        None => {
+            let mut pending: Vec<(usize, f64)> = case
+                .output
+                .pictures
+                .iter()
+                .enumerate()
+                .flat_map(|(k, p)| p.times.iter().map(move |&t| (k, t)))
+                .collect();
+            pending.sort_by(|a, b| a.1.total_cmp(&b.1));
+            let state = RunState {
+                tally: Tally::new(case),
+                next_snapshot: interval.unwrap_or(f64::INFINITY),
+                snapshots: Vec::new(),
+                frames: vec![Vec::new(); case.output.pictures.len()],
+                pending_pictures: pending,
+                wall_seconds: 0.0,
+                history_len: 0,
+            };
+            (
+                state,
+                HistoryWriter::create(&history_path, &sim.body_names)?,
+                PvdWriter::new(&pvd_path),
+            )
         }
     };
-    take_pictures(&sim, &mut picture_times);
-
-    let mut conserved = [true; 3];
-    for plane in &case.symmetry {
-        conserved[plane.axis] = false;
-    }
-    let mut tally = Tally {
-        conserved,
-        e0: None,
-        p0: [0.0; 3],
-        energy_scale: 0.0,
-        energy_dev: 0.0,
-        gravity0: 0.0,
-        momentum_dev: 0.0,
-        momentum_scale: 0.0,
-        min_gap: None,
-        interactions: 0,
-        last: Diagnostics::default(),
+    let resumed = opts.resume.is_some();
+    // A checkpoint is written with a snapshot of its step: a resumed run has that one already.
+    let last_snapshot = resumed.then_some(sim.step);
+    let mut run = Run {
+        case,
+        opts,
+        sim,
+        history,
+        pvd,
+        state,
+        last_snapshot,
+        start: Instant::now(),
     };
+    if !resumed {
+        run.snapshot()?;
+        run.take_pictures();
+    }
+
     let bar = opts.progress.then(|| progress_bar(end));
-    let start = Instant::now();
+    let first_step = run.sim.step;
     let mut last_log = Instant::now();
     let mut status = "completed".to_string();
     let mut failure = None;
+    let tol = 1e-9 * end;
 
-    while sim.time < end - tol && max_steps.is_none_or(|m| sim.step < m) {
-        let mut next_event = end.min(next_snapshot);
-        if let Some(&(_, t)) = picture_times.first() {
+    while run.sim.time < end - tol && max_steps.is_none_or(|m| run.sim.step < m) {
+        let mut next_event = end.min(run.state.next_snapshot);
+        if let Some(&(_, t)) = run.state.pending_pictures.first() {
             next_event = next_event.min(t);
         }
-        let d = match sim.step((next_event - sim.time).max(tol)) {
+        let d = match run.sim.step((next_event - run.sim.time).max(tol)) {
             Ok(d) => d,
             Err(e) => {
                 status = format!("unstable: {e}");
                 // The particles are still at the last good state: keep it on disk.
-                snapshot(&sim, &mut pvd)?;
+                run.snapshot()?;
                 failure = Some(e);
                 break;
             }
         };
-        tally.add(&d);
-        if (sim.step - 1) % case.output.history_every == 0 {
-            history.row(&d)?;
+        run.state.tally.add(&d);
+        if (run.sim.step - 1).is_multiple_of(case.output.history_every) {
+            run.history.row(&d)?;
         }
-        if sim.time >= next_snapshot - tol {
-            snapshot(&sim, &mut pvd)?;
-            while next_snapshot <= sim.time + tol {
-                next_snapshot += interval.unwrap_or(f64::INFINITY);
+        if run.sim.time >= run.state.next_snapshot - tol {
+            while run.state.next_snapshot <= run.sim.time + tol {
+                run.state.next_snapshot += interval.unwrap_or(f64::INFINITY);
             }
+            run.snapshot()?;
         }
-        take_pictures(&sim, &mut picture_times);
-        let wall = start.elapsed().as_secs_f64();
-        let rate = n as f64 * sim.step as f64 / wall.max(1e-9);
+        run.take_pictures();
+        let wall = run.start.elapsed().as_secs_f64();
+        let rate = n as f64 * (run.sim.step - first_step) as f64 / wall.max(1e-9);
         if let Some(bar) = &bar {
-            bar.set_position((sim.time / end * 1000.0) as u64);
+            bar.set_position((run.sim.time / end * 1000.0) as u64);
             bar.set_message(format!(
                 "t = {:.4e} s, step {}, {:.3e} particle-steps/s",
-                sim.time, sim.step, rate
+                run.sim.time, run.sim.step, rate
             ));
         } else if last_log.elapsed().as_secs_f64() > 10.0 {
             last_log = Instant::now();
             tracing::info!(
                 "t = {:.4e} s ({:.1} %), step {}, dt = {:.3e} s, {:.3e} particle-steps/s",
-                sim.time,
-                100.0 * sim.time / end,
-                sim.step,
+                run.sim.time,
+                100.0 * run.sim.time / end,
+                run.sim.step,
                 d.dt,
                 rate
             );
@@ -212,16 +280,19 @@ fn run_dim<const D: usize>(case: &Case, opts: &RunOptions) -> Result<Summary> {
     if let Some(bar) = &bar {
         bar.finish_and_clear();
     }
-    let wall = start.elapsed().as_secs_f64();
     if failure.is_none() {
-        history.row(&tally.last)?;
-        snapshot(&sim, &mut pvd)?;
+        // The checkpoint first, so that a resumed run drops this closing row.
+        run.snapshot()?;
+        let last = run.state.tally.last.clone();
+        run.history.row(&last)?;
     }
     if opts.write_fields {
-        write_pictures(case, out, &sim.body_names, &frames)?;
+        write_pictures(case, out, &run.sim.body_names, &run.state.frames)?;
     }
 
-    let steps = sim.step;
+    let wall = run.state.wall_seconds + run.start.elapsed().as_secs_f64();
+    let steps = run.sim.step;
+    let tally = &run.state.tally;
     let summary = Summary {
         case: case.name.clone(),
         dimension: D,
@@ -232,7 +303,7 @@ fn run_dim<const D: usize>(case: &Case, opts: &RunOptions) -> Result<Summary> {
         particle_steps_per_second: n as f64 * steps as f64 / wall.max(1e-12),
         interactions_per_second: tally.interactions as f64 / wall.max(1e-12),
         mean_neighbors: tally.interactions as f64 / (n as f64 * steps.max(1) as f64),
-        end_time: sim.time,
+        end_time: run.sim.time,
         energy_error: tally.energy_dev / tally.energy_scale.max(f64::MIN_POSITIVE),
         initial_energy: tally.e0.unwrap_or(0.0),
         final_energy: tally.last.total,

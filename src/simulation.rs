@@ -13,7 +13,7 @@ use crate::physics::{self, Model, Rates};
 use crate::setup;
 
 /// Global quantities at t_n (the start of the step that produced them).
-#[derive(Debug, Clone, Default, PartialEq)]
+#[derive(Debug, Clone, Default, PartialEq, serde::Serialize, serde::Deserialize)]
 pub struct Diagnostics {
     pub time: f64,
     pub dt: f64,
@@ -64,6 +64,21 @@ pub struct Simulation<const D: usize> {
     rates: Rates<D>,
     order: Vec<usize>,
     last_reorder: u64,
+    /// Search at the next step whatever the skin says (after a checkpoint, so that a resumed
+    /// run, which must search first, stays bit-identical).
+    force_search: bool,
+}
+
+/// The scalar state of a run in progress, beside its particles: what a checkpoint keeps.
+#[derive(Debug, Clone, PartialEq, serde::Serialize, serde::Deserialize)]
+pub struct SimState {
+    pub time: f64,
+    pub step: u64,
+    pub dt_prev: f64,
+    pub dt_first: Option<f64>,
+    pub speed_limit: f64,
+    pub searches: u64,
+    pub last_reorder: u64,
 }
 
 /// Real particles are put back in cell order at least this often (steps), for memory locality.
@@ -97,7 +112,41 @@ impl<const D: usize> Simulation<D> {
             rates: Rates::default(),
             order: Vec::new(),
             last_reorder: 0,
+            force_search: false,
         })
+    }
+
+    /// The state a checkpoint keeps: the real particles and the scalars. Taking it makes the
+    /// next step search afresh, as a run resumed from it will.
+    pub fn checkpoint_state(&mut self) -> (Particles<D>, SimState) {
+        self.force_search = true;
+        let mut particles = self.particles.clone();
+        particles.truncate_to_real();
+        (
+            particles,
+            SimState {
+                time: self.time,
+                step: self.step,
+                dt_prev: self.dt_prev,
+                dt_first: self.dt_first,
+                speed_limit: self.speed_limit,
+                searches: self.searches,
+                last_reorder: self.last_reorder,
+            },
+        )
+    }
+
+    /// Continue from a checkpoint's state (the case must be the one it was written for).
+    pub fn restore(&mut self, particles: Particles<D>, state: SimState) {
+        self.particles = particles;
+        self.time = state.time;
+        self.step = state.step;
+        self.dt_prev = state.dt_prev;
+        self.dt_first = state.dt_first;
+        self.speed_limit = state.speed_limit;
+        self.searches = state.searches;
+        self.last_reorder = state.last_reorder;
+        self.force_search = true;
     }
 
     /// Advance one step, of at most `dt_max`. On instability the particles are left at t_n
@@ -110,7 +159,8 @@ impl<const D: usize> Simulation<D> {
         // at the latest, when the real particles are also put back in cell order.
         self.ghosts.update(p, &self.symmetry);
         let reorder = self.step >= self.last_reorder + REORDER_EVERY;
-        if reorder || self.neighbors.stale(&p.x, &p.h) {
+        if reorder || self.force_search || self.neighbors.stale(&p.x, &p.h) {
+            self.force_search = false;
             if reorder && self.step > 0 {
                 let n = p.n_real;
                 self.order.clear();

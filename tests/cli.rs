@@ -247,4 +247,15 @@ type = "welded"
         })
         .count();
     assert!(snapshots >= 2, "{snapshots} snapshots");
+    // …and a checkpoint of it, which resumes (and fails again the same way).
+    assert!(out.join("checkpoint.bin").exists());
+    let again = strike(&[
+        "run",
+        deck.to_str().unwrap(),
+        "--resume",
+        out.join("checkpoint.bin").to_str().unwrap(),
+    ]);
+    assert!(!again.status.success());
+    let s2 = Summary::read(&out.join("summary.json")).unwrap();
+    assert_eq!(s2.status, s.status);
 }

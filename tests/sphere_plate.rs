@@ -95,6 +95,7 @@ fn coarse_sphere_plate_summary() {
         progress: false,
         max_steps: Some(60),
         write_fields: false,
+        resume: None,
     };
     let s = run(&case, &opts).unwrap();
     println!("{s:?}");

@@ -10,6 +10,8 @@ use std::path::{Path, PathBuf};
 pub struct HistoryWriter {
     path: PathBuf,
     out: BufWriter<File>,
+    /// Bytes in the file so far.
+    len: u64,
 }
 
 impl HistoryWriter {
@@ -22,6 +24,7 @@ impl HistoryWriter {
         let mut w = HistoryWriter {
             path: path.to_path_buf(),
             out: BufWriter::new(file),
+            len: 0,
         };
         let mut header = String::from(
             "time,dt,kinetic_energy,internal_energy,contact_energy,gravity_energy,total_energy,\
@@ -35,6 +38,33 @@ impl HistoryWriter {
         header.push('\n');
         w.write(&header)?;
         Ok(w)
+    }
+
+    /// Continue an existing history file (a resumed run) from its first `len` bytes (what it
+    /// held at the checkpoint: later rows, such as the closing row of the stopped run, go).
+    pub fn append(path: &Path, len: u64) -> Result<Self> {
+        let file = std::fs::OpenOptions::new()
+            .write(true)
+            .open(path)
+            .map_err(|e| Error::io(path, e))?;
+        file.set_len(len).map_err(|e| Error::io(path, e))?;
+        let mut file = file;
+        std::io::Seek::seek(&mut file, std::io::SeekFrom::End(0))
+            .map_err(|e| Error::io(path, e))?;
+        Ok(HistoryWriter {
+            path: path.to_path_buf(),
+            out: BufWriter::new(file),
+            len,
+        })
+    }
+
+    /// Bytes written so far.
+    pub fn len(&self) -> u64 {
+        self.len
+    }
+
+    pub fn is_empty(&self) -> bool {
+        self.len == 0
     }
 
     /// Append one row.
@@ -64,6 +94,7 @@ impl HistoryWriter {
     }
 
     fn write(&mut self, s: &str) -> Result<()> {
+        self.len += s.len() as u64;
         self.out
             .write_all(s.as_bytes())
             .and_then(|_| self.out.flush())

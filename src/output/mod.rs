@@ -1,5 +1,6 @@
 //! Output: ParaView snapshots, history, summary, pictures. Output never changes particles.
 
+pub mod checkpoint;
 pub mod history;
 pub mod picture;
 pub mod summary;

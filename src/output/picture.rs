@@ -20,7 +20,7 @@ use crate::particles::Particles;
 use crate::tensor;
 
 /// The particles of one cross-section at one time, ready to draw.
-#[derive(Debug, Clone, Default, PartialEq)]
+#[derive(Debug, Clone, Default, PartialEq, serde::Serialize, serde::Deserialize)]
 pub struct SectionFrame {
     /// Time (s).
     pub time: f64,

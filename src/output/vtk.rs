@@ -320,6 +320,19 @@ impl PvdWriter {
         }
     }
 
+    /// A collection that continues the listed snapshots (a resumed run).
+    pub fn resume(path: &Path, entries: Vec<(f64, String)>) -> Self {
+        PvdWriter {
+            path: path.to_path_buf(),
+            entries,
+        }
+    }
+
+    /// The snapshots listed so far.
+    pub fn entries(&self) -> &[(f64, String)] {
+        &self.entries
+    }
+
     /// The .pvd file path.
     pub fn path(&self) -> &Path {
         &self.path
