@@ -251,6 +251,7 @@ impl<const D: usize> Simulation<D> {
             dt,
             self.dt_prev,
         );
+        boundary::reflect_crossed(&mut self.particles, &self.symmetry);
 
         let p = &self.particles;
         let (mut ke_new, mut ie_new, mut mom_new) = (0.0, 0.0, [0.0; 3]);
