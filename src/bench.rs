@@ -182,8 +182,8 @@ fn measure_dim<const D: usize>(
 /// The standard benchmark. First the scaling series on all cores — cubes of 100³ (the
 /// million-particle memory figure, measured first while the process is fresh), 50³ and 25³
 /// particles — then every fixed case on 1 thread and on all cores. `quick` runs fewer steps and
-/// smaller cubes (a smoke test).
-pub fn run_all(quick: bool) -> Result<BenchReport> {
+/// smaller cubes (a smoke test). `report` is told of each case as it is measured.
+pub fn run_all(quick: bool, mut report: impl FnMut(&BenchCase)) -> Result<BenchReport> {
     let all = std::thread::available_parallelism().map_or(1, |n| n.get());
     let mut threads = vec![1];
     if all > 1 {
@@ -197,7 +197,7 @@ pub fn run_all(quick: bool) -> Result<BenchReport> {
     };
     for &(n, steps) in sizes {
         let c = measure(&cube_deck(n), "bench:cube", all, 1, steps)?;
-        eprintln!("{}", line(&c));
+        report(&c);
         cases.push(c);
     }
     let (warm, steps) = if quick { (1, 2) } else { (5, 60) };
@@ -209,7 +209,7 @@ pub fn run_all(quick: bool) -> Result<BenchReport> {
     for (text, label, s) in decks {
         for &t in &threads {
             let c = measure(text, label, t, warm, s.max(2))?;
-            eprintln!("{}", line(&c));
+            report(&c);
             cases.push(c);
         }
     }

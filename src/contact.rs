@@ -20,7 +20,7 @@
 //! nothing to balance it, and the stored potential (≈ 0.1 K Δp per unit area) launches the
 //! bodies apart (≈ 170 m/s for Al bars at Δp = 0.1 mm). strike instead sizes K so that the
 //! contact carries the *expected* interface pressure p_c at the natural spacing,
-//! K = p_c / (0.15 n), where p_c is the larger of the Hugoniot impact pressure at the bodies'
+//! K = p_c / (τ n), where p_c is the larger of the Hugoniot impact pressure at the bodies'
 //! relative speed and the weight of the heavier body on its footprint (gravity), with a floor of
 //! 10⁻⁴ of the smaller bulk modulus, and τ the traction per n K that the kernel carries across a
 //! lattice interface at the natural spacing ([`lattice_traction_per_nk`], computed for the
@@ -32,8 +32,9 @@
 //! **Resolution.** The contact acts across the whole kernel support, 2h ≈ 2.4 Δp: a compliant
 //! layer about one spacing thick. It is faithful when the bodies close by much more than Δp
 //! while in contact — (v/c)(L/Δp) ≫ 1 for bars of length L meeting at ±v — as in an impact at
-//! hundreds of m/s and above. At ±10 m/s with L/Δp = 100 the layer dominates (tests/
-//! verification_contact.rs measures it) and a finer lattice is needed.
+//! hundreds of m/s and above. At ±10 m/s with L/Δp = 100 the layer dominates (the bars part at
+//! ∓13.7 m/s instead of ∓10; see the separation test in tests/verification_contact.rs) and a
+//! finer lattice is needed.
 
 use crate::kernel::Kernel;
 

@@ -110,10 +110,8 @@ fn main_inner() -> Result<(), Report> {
             Ok(())
         }
         Command::Bench { quick, json } => {
-            let report = strike::bench::run_all(quick).map_err(|e| miette!("{e}"))?;
-            for c in &report.cases {
-                println!("{}", strike::bench::line(c));
-            }
+            let report = strike::bench::run_all(quick, |c| println!("{}", strike::bench::line(c)))
+                .map_err(|e| miette!("{e}"))?;
             let text = serde_json::to_string_pretty(&report).map_err(|e| miette!("{e}"))?;
             std::fs::write(&json, text + "\n")
                 .map_err(|e| miette!("cannot write {}: {e}", json.display()))?;

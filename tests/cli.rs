@@ -259,3 +259,64 @@ type = "welded"
     let s2 = Summary::read(&out.join("summary.json")).unwrap();
     assert_eq!(s2.status, s.status);
 }
+
+/// `strike bench --quick` measures every built-in case on 1 thread and all cores and writes
+/// bench.json with the documented keys; the neighbour counts are those of the lattices
+/// (h = 1.2 Δp: about 50 in 3D, 20 in 2D, fewer at free surfaces).
+#[test]
+fn bench_writes_its_report() {
+    let dir = out_dir("bench");
+    std::fs::create_dir_all(&dir).unwrap();
+    let json = dir.join("bench.json");
+    let out = strike(&["bench", "--quick", "--json", json.to_str().unwrap()]);
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let v: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(&json).unwrap()).unwrap();
+    let cases = v["cases"].as_array().unwrap();
+    let keys = [
+        "name",
+        "dimension",
+        "particles",
+        "threads",
+        "steps",
+        "wall_seconds",
+        "particle_steps_per_second",
+        "interactions_per_second_per_core",
+        "mean_neighbors",
+        "peak_rss_bytes",
+        "bytes_per_particle",
+    ];
+    for c in cases {
+        for k in keys {
+            assert!(c.get(k).is_some(), "{k} missing in {c}");
+        }
+        let nb = c["mean_neighbors"].as_f64().unwrap();
+        let range = if c["dimension"] == 3 {
+            30.0..60.0
+        } else {
+            12.0..22.0
+        };
+        assert!(range.contains(&nb), "{}: {nb} neighbours", c["name"]);
+    }
+    for name in ["cubes_3d", "sphere_plate", "plates_2d"] {
+        let threads: Vec<u64> = cases
+            .iter()
+            .filter(|c| c["name"] == name)
+            .map(|c| c["threads"].as_u64().unwrap())
+            .collect();
+        assert!(threads.contains(&1), "{name} on 1 thread");
+        assert_eq!(
+            threads.len(),
+            if num_cpus() > 1 { 2 } else { 1 },
+            "{name}: {threads:?}"
+        );
+    }
+}
+
+fn num_cpus() -> usize {
+    std::thread::available_parallelism().map_or(1, |n| n.get())
+}
