@@ -97,13 +97,13 @@ impl<const D: usize> Run<'_, D> {
 
     /// Snapshot (and checkpoint) of the current state, once per step.
     fn snapshot(&mut self) -> Result<()> {
-        if !self.opts.write_fields || self.last_snapshot == Some(self.sim.step) {
+        if !self.opts.write_fields || self.last_snapshot == Some(self.sim.state.step) {
             return Ok(());
         }
-        self.last_snapshot = Some(self.sim.step);
-        let name = format!("{}_{:06}.vtp", self.case.name, self.sim.step);
-        vtk::write_snapshot(&self.out(&name), &self.sim.particles, self.sim.time)?;
-        self.pvd.add(self.sim.time, &name)?;
+        self.last_snapshot = Some(self.sim.state.step);
+        let name = format!("{}_{:06}.vtp", self.case.name, self.sim.state.step);
+        vtk::write_snapshot(&self.out(&name), &self.sim.particles, self.sim.state.time)?;
+        self.pvd.add(self.sim.state.time, &name)?;
         self.checkpoint()
     }
 
@@ -127,14 +127,14 @@ impl<const D: usize> Run<'_, D> {
     fn take_pictures(&mut self) {
         let tol = 1e-9 * self.case.simulation.end_time;
         while let Some(&(k, t)) = self.state.pending_pictures.first() {
-            if t > self.sim.time + tol {
+            if t > self.sim.state.time + tol {
                 break;
             }
             let spec = &self.case.output.pictures[k];
             let thickness = section_thickness(self.case, spec);
             self.state.frames[k].push(picture::extract_section(
                 &self.sim.particles,
-                self.sim.time,
+                self.sim.state.time,
                 spec,
                 thickness,
             ));
@@ -208,7 +208,7 @@ fn run_dim<const D: usize>(case: &Case, opts: &RunOptions) -> Result<Summary> {
     };
     let resumed = opts.resume.is_some();
     // A checkpoint is written with a snapshot of its step: a resumed run has that one already.
-    let last_snapshot = resumed.then_some(sim.step);
+    let last_snapshot = resumed.then_some(sim.state.step);
     let mut run = Run {
         case,
         opts,
@@ -225,18 +225,18 @@ fn run_dim<const D: usize>(case: &Case, opts: &RunOptions) -> Result<Summary> {
     }
 
     let bar = opts.progress.then(|| progress_bar(end));
-    let first_step = run.sim.step;
+    let first_step = run.sim.state.step;
     let mut last_log = Instant::now();
     let mut status = "completed".to_string();
     let mut failure = None;
     let tol = 1e-9 * end;
 
-    while run.sim.time < end - tol && max_steps.is_none_or(|m| run.sim.step < m) {
+    while run.sim.state.time < end - tol && max_steps.is_none_or(|m| run.sim.state.step < m) {
         let mut next_event = end.min(run.state.next_snapshot);
         if let Some(&(_, t)) = run.state.pending_pictures.first() {
             next_event = next_event.min(t);
         }
-        let d = match run.sim.step((next_event - run.sim.time).max(tol)) {
+        let d = match run.sim.step((next_event - run.sim.state.time).max(tol)) {
             Ok(d) => d,
             Err(e) => {
                 status = format!("unstable: {e}");
@@ -247,31 +247,31 @@ fn run_dim<const D: usize>(case: &Case, opts: &RunOptions) -> Result<Summary> {
             }
         };
         run.state.tally.add(&d);
-        if (run.sim.step - 1).is_multiple_of(case.output.history_every) {
+        if (run.sim.state.step - 1).is_multiple_of(case.output.history_every) {
             run.history.row(&d)?;
         }
-        if run.sim.time >= run.state.next_snapshot - tol {
-            while run.state.next_snapshot <= run.sim.time + tol {
+        if run.sim.state.time >= run.state.next_snapshot - tol {
+            while run.state.next_snapshot <= run.sim.state.time + tol {
                 run.state.next_snapshot += interval.unwrap_or(f64::INFINITY);
             }
             run.snapshot()?;
         }
         run.take_pictures();
         let wall = run.start.elapsed().as_secs_f64();
-        let rate = n as f64 * (run.sim.step - first_step) as f64 / wall.max(1e-9);
+        let rate = n as f64 * (run.sim.state.step - first_step) as f64 / wall.max(1e-9);
         if let Some(bar) = &bar {
-            bar.set_position((run.sim.time / end * 1000.0) as u64);
+            bar.set_position((run.sim.state.time / end * 1000.0) as u64);
             bar.set_message(format!(
                 "t = {:.4e} s, step {}, {:.3e} particle-steps/s",
-                run.sim.time, run.sim.step, rate
+                run.sim.state.time, run.sim.state.step, rate
             ));
         } else if last_log.elapsed().as_secs_f64() > 10.0 {
             last_log = Instant::now();
             tracing::info!(
                 "t = {:.4e} s ({:.1} %), step {}, dt = {:.3e} s, {:.3e} particle-steps/s",
-                run.sim.time,
-                100.0 * run.sim.time / end,
-                run.sim.step,
+                run.sim.state.time,
+                100.0 * run.sim.state.time / end,
+                run.sim.state.step,
                 d.dt,
                 rate
             );
@@ -291,7 +291,7 @@ fn run_dim<const D: usize>(case: &Case, opts: &RunOptions) -> Result<Summary> {
     }
 
     let wall = run.state.wall_seconds + run.start.elapsed().as_secs_f64();
-    let steps = run.sim.step;
+    let steps = run.sim.state.step;
     let tally = &run.state.tally;
     let summary = Summary {
         case: case.name.clone(),
@@ -303,7 +303,7 @@ fn run_dim<const D: usize>(case: &Case, opts: &RunOptions) -> Result<Summary> {
         particle_steps_per_second: n as f64 * steps as f64 / wall.max(1e-12),
         interactions_per_second: tally.interactions as f64 / wall.max(1e-12),
         mean_neighbors: tally.interactions as f64 / (n as f64 * steps.max(1) as f64),
-        end_time: run.sim.time,
+        end_time: run.sim.state.time,
         energy_error: tally.energy_dev / tally.energy_scale.max(f64::MIN_POSITIVE),
         initial_energy: tally.e0.unwrap_or(0.0),
         final_energy: tally.last.total,

@@ -49,6 +49,21 @@ pub struct Simulation<const D: usize> {
     pub kernel: KernelKind,
     pub symmetry: Vec<Plane>,
     pub body_names: Vec<String>,
+    /// Time, step and the other scalars a checkpoint keeps.
+    pub state: SimState,
+    neighbors: NeighborList,
+    ghosts: boundary::Ghosts,
+    rates: Rates<D>,
+    order: Vec<usize>,
+    /// Search at the next step whatever the skin says (after a checkpoint, so that a resumed
+    /// run, which must search first, stays bit-identical).
+    force_search: bool,
+}
+
+/// The scalar state of a run in progress, beside its particles: what a checkpoint keeps.
+#[derive(Debug, Clone, PartialEq, serde::Serialize, serde::Deserialize)]
+pub struct SimState {
+    /// Simulated time t_n (s) and step n.
     pub time: f64,
     pub step: u64,
     /// Δt of the last step (0 before the first).
@@ -59,25 +74,7 @@ pub struct Simulation<const D: usize> {
     pub speed_limit: f64,
     /// Neighbour searches made so far.
     pub searches: u64,
-    neighbors: NeighborList,
-    ghosts: boundary::Ghosts,
-    rates: Rates<D>,
-    order: Vec<usize>,
-    last_reorder: u64,
-    /// Search at the next step whatever the skin says (after a checkpoint, so that a resumed
-    /// run, which must search first, stays bit-identical).
-    force_search: bool,
-}
-
-/// The scalar state of a run in progress, beside its particles: what a checkpoint keeps.
-#[derive(Debug, Clone, PartialEq, serde::Serialize, serde::Deserialize)]
-pub struct SimState {
-    pub time: f64,
-    pub step: u64,
-    pub dt_prev: f64,
-    pub dt_first: Option<f64>,
-    pub speed_limit: f64,
-    pub searches: u64,
+    /// Step of the last reordering into cell order.
     pub last_reorder: u64,
 }
 
@@ -99,19 +96,21 @@ impl<const D: usize> Simulation<D> {
             kernel: case.simulation.kernel,
             symmetry: setup::symmetry_planes(case),
             body_names: case.bodies.iter().map(|b| b.name.clone()).collect(),
-            time: 0.0,
-            step: 0,
-            dt_prev: 0.0,
-            dt_first: None,
-            // DESIGN.md: 10× the fastest initial speed. Bodies starting at rest (a block on an
-            // incline) would trip that at once, so the sound speed bounds it from below.
-            speed_limit: 10.0 * v0.max(c0),
-            searches: 0,
+            state: SimState {
+                time: 0.0,
+                step: 0,
+                dt_prev: 0.0,
+                dt_first: None,
+                // DESIGN.md: 10× the fastest initial speed. Bodies starting at rest (a block on
+                // an incline) would trip that at once, so the sound speed bounds it from below.
+                speed_limit: 10.0 * v0.max(c0),
+                searches: 0,
+                last_reorder: 0,
+            },
             neighbors: NeighborList::default(),
             ghosts: boundary::Ghosts::default(),
             rates: Rates::default(),
             order: Vec::new(),
-            last_reorder: 0,
             force_search: false,
         })
     }
@@ -122,30 +121,13 @@ impl<const D: usize> Simulation<D> {
         self.force_search = true;
         let mut particles = self.particles.clone();
         particles.truncate_to_real();
-        (
-            particles,
-            SimState {
-                time: self.time,
-                step: self.step,
-                dt_prev: self.dt_prev,
-                dt_first: self.dt_first,
-                speed_limit: self.speed_limit,
-                searches: self.searches,
-                last_reorder: self.last_reorder,
-            },
-        )
+        (particles, self.state.clone())
     }
 
     /// Continue from a checkpoint's state (the case must be the one it was written for).
     pub fn restore(&mut self, particles: Particles<D>, state: SimState) {
         self.particles = particles;
-        self.time = state.time;
-        self.step = state.step;
-        self.dt_prev = state.dt_prev;
-        self.dt_first = state.dt_first;
-        self.speed_limit = state.speed_limit;
-        self.searches = state.searches;
-        self.last_reorder = state.last_reorder;
+        self.state = state;
         self.force_search = true;
     }
 
@@ -153,15 +135,15 @@ impl<const D: usize> Simulation<D> {
     /// (the last good state) and the error names the particle, its body, place and cause.
     pub fn step(&mut self, dt_max: f64) -> Result<Diagnostics> {
         let p = &mut self.particles;
-        integrate::predict_velocity(p, &self.model, self.dt_prev);
+        integrate::predict_velocity(p, &self.model, self.state.dt_prev);
         // Ghosts and neighbour lists are rebuilt when the skin is used up (positions are those
         // of the real particles with the old ghosts refreshed), and every REORDER_EVERY steps
         // at the latest, when the real particles are also put back in cell order.
         self.ghosts.update(p, &self.symmetry);
-        let reorder = self.step >= self.last_reorder + REORDER_EVERY;
+        let reorder = self.state.step >= self.state.last_reorder + REORDER_EVERY;
         if reorder || self.force_search || self.neighbors.stale(&p.x, &p.h) {
             self.force_search = false;
-            if reorder && self.step > 0 {
+            if reorder && self.state.step > 0 {
                 let n = p.n_real;
                 self.order.clear();
                 self.order.extend(
@@ -172,13 +154,13 @@ impl<const D: usize> Simulation<D> {
                         .filter(|&i| i < n),
                 );
                 p.permute(&self.order);
-                self.last_reorder = self.step;
+                self.state.last_reorder = self.state.step;
             }
             let h_max = p.h.iter().copied().fold(0.0_f64, f64::max);
             let skin = SKIN * h_max;
             self.ghosts.rebuild(p, &self.symmetry, 2.0 * h_max + skin);
             self.neighbors.build(&p.x, &p.h, p.n_real, skin);
-            self.searches += 1;
+            self.state.searches += 1;
         }
         match self.kernel {
             KernelKind::CubicSpline => physics::compute_rates(
@@ -201,15 +183,15 @@ impl<const D: usize> Simulation<D> {
             .iter()
             .map(|r| r.dt)
             .fold(f64::INFINITY, f64::min);
-        if self.dt_prev > 0.0 {
-            dt_stable = dt_stable.min(1.25 * self.dt_prev);
+        if self.state.dt_prev > 0.0 {
+            dt_stable = dt_stable.min(1.25 * self.state.dt_prev);
         }
-        let dt_first = *self.dt_first.get_or_insert(dt_stable);
+        let dt_first = *self.state.dt_first.get_or_insert(dt_stable);
         let dt = dt_stable.min(dt_max);
         self.check(dt, dt_stable, dt_first)?;
 
         let mut d = Diagnostics {
-            time: self.time,
+            time: self.state.time,
             dt,
             body_contact_force: vec![[0.0; 3]; self.body_names.len()],
             interactions: self
@@ -249,7 +231,7 @@ impl<const D: usize> Simulation<D> {
             &self.rates,
             &self.model,
             dt,
-            self.dt_prev,
+            self.state.dt_prev,
         );
         boundary::reflect_crossed(&mut self.particles, &self.symmetry);
 
@@ -266,7 +248,7 @@ impl<const D: usize> Simulation<D> {
         }
         // Whole-step values are the means of the half-step ones; the first step starts from
         // v^0 and e^0 themselves.
-        if self.step == 0 {
+        if self.state.step == 0 {
             d.kinetic = ke_old;
             d.internal = ie_old;
             d.momentum = mom_old;
@@ -276,9 +258,9 @@ impl<const D: usize> Simulation<D> {
             d.momentum = [0, 1, 2].map(|k| 0.5 * (mom_old[k] + mom_new[k]));
         }
         d.total = d.kinetic + d.internal + d.contact + d.gravity;
-        self.time += dt;
-        self.step += 1;
-        self.dt_prev = dt;
+        self.state.time += dt;
+        self.state.step += 1;
+        self.state.dt_prev = dt;
         Ok(d)
     }
 
@@ -297,11 +279,11 @@ impl<const D: usize> Simulation<D> {
                 && p.s[i].iter().all(|c| c.is_finite());
             if !finite {
                 Some((i, "position, velocity, density, energy or stress is not finite (NaN/inf)".to_string()))
-            } else if p.v[i].norm() > self.speed_limit {
+            } else if p.v[i].norm() > self.state.speed_limit {
                 Some((i, format!(
                     "speed {:.4e} m/s exceeds 10× the fastest initial speed or sound speed ({:.4e} m/s)",
                     p.v[i].norm(),
-                    self.speed_limit
+                    self.state.speed_limit
                 )))
             } else {
                 None
@@ -347,8 +329,8 @@ impl<const D: usize> Simulation<D> {
         };
         let pos: Vec<String> = to3(&p.x[i]).iter().map(|c| format!("{c:.6e}")).collect();
         Err(Error::Unstable {
-            step: self.step,
-            time: self.time,
+            step: self.state.step,
+            time: self.state.time,
             cause: format!(
                 "particle {} of body '{}' at ({}) m: {cause}",
                 p.id[i],

@@ -20,8 +20,8 @@ fn coarse_sphere_plate_impact() {
     let rear_z0 = 3.0e-4 + 0.5 * 3.0e-4;
     let end = case.simulation.end_time;
     let mut hist = Vec::new();
-    while sim.time < end * (1.0 - 1e-12) {
-        match sim.step(end - sim.time) {
+    while sim.state.time < end * (1.0 - 1e-12) {
+        match sim.step(end - sim.state.time) {
             Ok(d) => hist.push(d),
             Err(e) => panic!("unstable: {e}"),
         }
@@ -124,7 +124,7 @@ fn coarse_debris_stays_on_the_model_side() {
     let first = sim.step(1.0).unwrap();
     let mut worst_momentum: f64 = 0.0;
     let mut worst_depth = f64::INFINITY;
-    while sim.time < 0.6e-6 {
+    while sim.state.time < 0.6e-6 {
         let d = sim.step(1.0).unwrap();
         worst_momentum = worst_momentum.max((d.momentum[2] / first.momentum[2] - 1.0).abs());
         let p = &sim.particles;
@@ -134,7 +134,7 @@ fn coarse_debris_stays_on_the_model_side() {
     }
     println!(
         "coarse sphere-plate to 0.6 µs: {} steps, closest approach to a plane {worst_depth:.3e} m, z-momentum {worst_momentum:.3e}",
-        sim.step
+        sim.state.step
     );
     assert!(
         worst_depth >= 0.0,

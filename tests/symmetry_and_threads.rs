@@ -29,8 +29,8 @@ fn run(case: &Case) -> (Simulation<3>, Vec<Diagnostics>) {
     let mut sim = Simulation::<3>::new(case).unwrap();
     let mut hist = Vec::new();
     let end = case.simulation.end_time;
-    while sim.time < end * (1.0 - 1e-12) {
-        hist.push(sim.step(end - sim.time).unwrap());
+    while sim.state.time < end * (1.0 - 1e-12) {
+        hist.push(sim.step(end - sim.state.time).unwrap());
     }
     (sim, hist)
 }

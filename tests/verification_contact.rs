@@ -61,9 +61,9 @@ fn run<const D: usize>(case: &Case) -> (Vec<Row>, Simulation<D>) {
 fn try_run<const D: usize>(case: &Case) -> (Vec<Row>, Simulation<D>, Option<String>) {
     let mut sim = Simulation::<D>::new(case).expect("setup");
     let mut rows = Vec::new();
-    while sim.time < case.simulation.end_time * (1.0 - 1e-12) {
+    while sim.state.time < case.simulation.end_time * (1.0 - 1e-12) {
         let (vmean, com) = body_means(&sim);
-        match sim.step(case.simulation.end_time - sim.time) {
+        match sim.step(case.simulation.end_time - sim.state.time) {
             Ok(d) => rows.push(Row { d, vmean, com }),
             Err(e) => return (rows, sim, Some(format!("{e:?}"))),
         }
@@ -451,9 +451,9 @@ fn planar_figures(case: &Case) -> (f64, f64, f64, Vec<Row>) {
     let mut fronts = Vec::new();
     let (mut p_sum, mut u_sum, mut n_sum) = (0.0, 0.0, 0.0);
     for t_stop in [0.6e-6, 1.2e-6] {
-        while sim.time < t_stop * (1.0 - 1e-12) {
+        while sim.state.time < t_stop * (1.0 - 1e-12) {
             let (vmean, com) = body_means(&sim);
-            let d = sim.step(t_stop - sim.time).unwrap();
+            let d = sim.step(t_stop - sim.state.time).unwrap();
             rows.push(Row { d, vmean, com });
         }
         let p = &sim.particles;
@@ -462,7 +462,7 @@ fn planar_figures(case: &Case) -> (f64, f64, f64, Vec<Row>) {
             .filter(|&i| p.body[i] == 1 && p.v[i][0] > 250.0)
             .map(|i| p.x[i][0])
             .fold(f64::NEG_INFINITY, f64::max);
-        fronts.push((sim.time, front));
+        fronts.push((sim.state.time, front));
         // Plateau: target particles from 0.5 mm behind the interface to 0.5 mm behind the front.
         for i in (0..p.n_real)
             .filter(|&i| p.body[i] == 1 && p.x[i][0] > 0.5e-3 && p.x[i][0] < front - 0.5e-3)

@@ -17,8 +17,8 @@ fn example(name: &str) -> Case {
 /// Run to `t`, returning every step's diagnostics.
 fn run_to<const D: usize>(sim: &mut Simulation<D>, t: f64) -> Vec<Diagnostics> {
     let mut out = Vec::new();
-    while sim.time < t * (1.0 - 1e-12) {
-        out.push(sim.step(t - sim.time).expect("stable run"));
+    while sim.state.time < t * (1.0 - 1e-12) {
+        out.push(sim.step(t - sim.state.time).expect("stable run"));
     }
     out
 }
@@ -58,9 +58,9 @@ fn elastic_wave_front_speed() {
     let v = case.bodies[0].velocity[0];
     let mut sim = Simulation::<2>::new(&case).unwrap();
     run_to(&mut sim, 4e-6);
-    let (t1, x1) = (sim.time, front(&sim, 1, 0.5 * v));
+    let (t1, x1) = (sim.state.time, front(&sim, 1, 0.5 * v));
     run_to(&mut sim, 12e-6);
-    let (t2, x2) = (sim.time, front(&sim, 1, 0.5 * v));
+    let (t2, x2) = (sim.state.time, front(&sim, 1, 0.5 * v));
     let speed = (x2 - x1) / (t2 - t1);
     let err = speed / c - 1.0;
     println!(
@@ -153,7 +153,7 @@ fn instability_names_particle_body_place_and_cause() {
     sim.particles.v[victim][1] = f64::NAN;
     sim.particles.vh[victim][1] = f64::NAN;
     let before = sim.particles.x.clone();
-    let step = sim.step;
+    let step = sim.state.step;
     match sim.step(1.0) {
         Err(Error::Unstable { step: s, cause, .. }) => {
             println!("{cause}");
