@@ -153,6 +153,19 @@ enum Frame {
     Array { base: Vec<Seg>, index: usize },
 }
 
+/// The frame a value opening with `{` (an inline table) or `[` (an array) starts at `base`.
+fn open_frame(opening: char, base: Vec<Seg>) -> Frame {
+    if opening == '{' {
+        Frame::Inline {
+            base,
+            key: Vec::new(),
+            in_value: false,
+        }
+    } else {
+        Frame::Array { base, index: 0 }
+    }
+}
+
 /// The dotted key path naming what is at byte `offset` of `text` (empty at the top level).
 pub fn key_path_at(text: &str, offset: usize) -> String {
     let tokens = lex(text);
@@ -278,15 +291,7 @@ pub fn key_path_at(text: &str, offset: usize) -> String {
                     let mut p = base.clone();
                     p.extend(key_segments(key).into_iter().map(Seg::Key));
                     best = render(&p);
-                    frames.push(if *c == '{' {
-                        Frame::Inline {
-                            base: p,
-                            key: Vec::new(),
-                            in_value: false,
-                        }
-                    } else {
-                        Frame::Array { base: p, index: 0 }
-                    });
+                    frames.push(open_frame(*c, p));
                 }
                 _ => {}
             },
@@ -305,15 +310,7 @@ pub fn key_path_at(text: &str, offset: usize) -> String {
                     let mut p = base.clone();
                     p.push(Seg::Index(*index));
                     best = render(&p);
-                    frames.push(if *c == '{' {
-                        Frame::Inline {
-                            base: p,
-                            key: Vec::new(),
-                            in_value: false,
-                        }
-                    } else {
-                        Frame::Array { base: p, index: 0 }
-                    });
+                    frames.push(open_frame(*c, p));
                 }
                 _ => {
                     let mut p = base.clone();
