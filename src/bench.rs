@@ -179,11 +179,26 @@ fn measure_dim<const D: usize>(
     })
 }
 
+/// The groups of cases `run_all` can be limited to.
+pub const GROUPS: [&str; 4] = ["scaling", "cubes_3d", "sphere_plate", "plates_2d"];
+
 /// The standard benchmark. First the scaling series on all cores — cubes of 100³ (the
 /// million-particle memory figure, measured first while the process is fresh), 50³ and 25³
 /// particles — then every fixed case on 1 thread and on all cores. `quick` runs fewer steps and
-/// smaller cubes (a smoke test). `report` is told of each case as it is measured.
-pub fn run_all(quick: bool, mut report: impl FnMut(&BenchCase)) -> Result<BenchReport> {
+/// smaller cubes (a smoke test). `only` limits the run to some of [`GROUPS`] (all when empty).
+/// `report` is told of each case as it is measured.
+pub fn run_all(
+    quick: bool,
+    only: &[String],
+    mut report: impl FnMut(&BenchCase),
+) -> Result<BenchReport> {
+    if let Some(bad) = only.iter().find(|g| !GROUPS.contains(&g.as_str())) {
+        return Err(Error::Invalid(format!(
+            "unknown benchmark case `{bad}`: expected one of {}",
+            GROUPS.join(", ")
+        )));
+    }
+    let wanted = |g: &str| only.is_empty() || only.iter().any(|o| o == g);
     let all = std::thread::available_parallelism().map_or(1, |n| n.get());
     let mut threads = vec![1];
     if all > 1 {
@@ -195,18 +210,23 @@ pub fn run_all(quick: bool, mut report: impl FnMut(&BenchCase)) -> Result<BenchR
     } else {
         &[(100, 3), (50, 10), (25, 40)]
     };
-    for &(n, steps) in sizes {
+    for &(n, steps) in sizes.iter().filter(|_| wanted("scaling")) {
         let c = measure(&cube_deck(n), "bench:cube", all, 1, steps)?;
         report(&c);
         cases.push(c);
     }
     let (warm, steps) = if quick { (1, 2) } else { (5, 60) };
-    let decks: [(&str, &str, u64); 3] = [
-        (CUBES_3D, "bench:cubes_3d", steps),
-        (SPHERE_PLATE, "bench:sphere_plate", steps / 2),
-        (PLATES_2D, "bench:plates_2d", steps),
+    let decks: [(&str, &str, &str, u64); 3] = [
+        ("cubes_3d", CUBES_3D, "bench:cubes_3d", steps),
+        (
+            "sphere_plate",
+            SPHERE_PLATE,
+            "bench:sphere_plate",
+            steps / 2,
+        ),
+        ("plates_2d", PLATES_2D, "bench:plates_2d", steps),
     ];
-    for (text, label, s) in decks {
+    for (_, text, label, s) in decks.into_iter().filter(|d| wanted(d.0)) {
         for &t in &threads {
             let c = measure(text, label, t, warm, s.max(2))?;
             report(&c);

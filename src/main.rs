@@ -46,6 +46,9 @@ enum Command {
         /// Where to write the JSON report.
         #[arg(long, default_value = "bench.json")]
         json: PathBuf,
+        /// Run only these cases (repeatable): scaling, cubes_3d, sphere_plate, plates_2d.
+        #[arg(long = "case", value_name = "NAME")]
+        cases: Vec<String>,
     },
     /// Read and validate a deck without running it: particles, h, first time step, memory and
     /// run-time estimates, warnings.
@@ -109,9 +112,10 @@ fn main_inner() -> Result<(), Report> {
             println!("output in {}", out_dir.display());
             Ok(())
         }
-        Command::Bench { quick, json } => {
-            let report = strike::bench::run_all(quick, |c| println!("{}", strike::bench::line(c)))
-                .map_err(|e| miette!("{e}"))?;
+        Command::Bench { quick, json, cases } => {
+            let report =
+                strike::bench::run_all(quick, &cases, |c| println!("{}", strike::bench::line(c)))
+                    .map_err(|e| miette!("{e}"))?;
             let text = serde_json::to_string_pretty(&report).map_err(|e| miette!("{e}"))?;
             std::fs::write(&json, text + "\n")
                 .map_err(|e| miette!("cannot write {}: {e}", json.display()))?;
