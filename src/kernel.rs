@@ -14,8 +14,9 @@ pub trait Kernel: Copy + Send + Sync {
     fn dw<const D: usize>(&self, r: f64, h: f64) -> f64;
     /// d²W/dr².
     fn d2w<const D: usize>(&self, r: f64, h: f64) -> f64;
-    /// (1/r) dW/dr, so that ∇_i W_ij = x_ij · grad_factor(r_ij, h): the form the pair loop uses,
-    /// written to avoid dividing by r where the kernel allows.
+    /// (1/r) dW/dr for r > 0, so that ∇_i W_ij = x_ij · grad_factor(r_ij, h): the form the pair
+    /// loop uses. Written without branches (selects only) and with a single division, so that
+    /// the pair loop, which evaluates it for several neighbours at once, vectorises.
     fn grad_factor<const D: usize>(&self, r: f64, h: f64) -> f64;
 }
 
@@ -29,6 +30,17 @@ pub struct CubicSpline;
 /// W = σ_D/h^D (1 − q/2)⁴ (2q + 1), σ = 7/(4π) in 2D, 21/(16π) in 3D.
 #[derive(Debug, Clone, Copy, Default)]
 pub struct WendlandC2;
+
+/// x^(D+2), by multiplication (the exponent of 1/h in (1/r) dW/dr).
+#[inline(always)]
+fn pow_d2<const D: usize>(x: f64) -> f64 {
+    let x2 = x * x;
+    match D {
+        1 => x2 * x,
+        2 => x2 * x2,
+        _ => x2 * x2 * x,
+    }
+}
 
 fn h_pow<const D: usize>(h: f64) -> f64 {
     match D {
@@ -97,20 +109,18 @@ impl Kernel for CubicSpline {
 }
 
 impl CubicSpline {
-    /// (1/r) dW/dr = σ/h^(D+2) · { −3 + 9/4 q (q < 1); −¾ (2 − q)²/q (1 ≤ q < 2) }.
+    /// (1/r) dW/dr = σ/h^(D+2) · { −3 + 9/4 q (q < 1); −¾ (2 − q)²/q (1 ≤ q < 2); 0 }, with
+    /// 1/h and 1/q = h/r both taken from the one division 1/(r h).
     #[inline(always)]
     fn grad_factor_impl<const D: usize>(r: f64, h: f64) -> f64 {
-        let inv_h = 1.0 / h;
+        let d = 1.0 / (r * h);
+        let inv_h = r * d;
         let q = r * inv_h;
-        let f = if q < 1.0 {
-            -3.0 + 2.25 * q
-        } else if q < 2.0 {
-            let t = 2.0 - q;
-            -0.75 * t * t / q
-        } else {
-            return 0.0;
-        };
-        Self::sigma::<D>() * inv_h.powi(D as i32 + 2) * f
+        let inner = -3.0 + 2.25 * q;
+        let t = (2.0 - q).max(0.0);
+        let outer = -0.75 * t * t * (h * h * d);
+        let f = if q < 1.0 { inner } else { outer };
+        Self::sigma::<D>() * pow_d2::<D>(inv_h) * f
     }
 }
 
@@ -155,16 +165,12 @@ impl Kernel for WendlandC2 {
         Self::sigma::<D>() / (h_pow::<D>(h) * h * h) * t * t * (10.0 * q - 5.0)
     }
 
-    /// (1/r) dW/dr = −5 σ/h^(D+2) (1 − q/2)³.
+    /// (1/r) dW/dr = −5 σ/h^(D+2) (1 − q/2)³, 0 beyond the support.
     #[inline(always)]
     fn grad_factor<const D: usize>(&self, r: f64, h: f64) -> f64 {
         let inv_h = 1.0 / h;
-        let q = r * inv_h;
-        if q >= 2.0 {
-            return 0.0;
-        }
-        let t = 1.0 - 0.5 * q;
-        -5.0 * Self::sigma::<D>() * inv_h.powi(D as i32 + 2) * t * t * t
+        let t = (1.0 - 0.5 * r * inv_h).max(0.0);
+        -5.0 * Self::sigma::<D>() * pow_d2::<D>(inv_h) * t * t * t
     }
 }
 
@@ -261,5 +267,30 @@ mod tests {
                 assert!((d2w - fd2).abs() < 1e-6, "d²W at r={r}: {d2w} vs {fd2}");
             }
         }
+    }
+
+    /// The branch-free (1/r) dW/dr agrees with dW/dr / r everywhere, 0 beyond the support.
+    #[test]
+    fn grad_factor_is_dw_over_r() {
+        fn check<const D: usize, K: Kernel>(k: K) {
+            let h = 0.37;
+            for i in 1..=260 {
+                let r = i as f64 * 0.01 * h;
+                let expect = k.dw::<D>(r, h) / r;
+                let got = k.grad_factor::<D>(r, h);
+                assert!(
+                    (got - expect).abs() <= 1e-13 * expect.abs().max(1.0 / h.powi(D as i32 + 2)),
+                    "D={D} q={}: {got} vs {expect}",
+                    r / h
+                );
+                if r >= 2.0 * h {
+                    assert_eq!(got, 0.0);
+                }
+            }
+        }
+        check::<2, _>(CubicSpline);
+        check::<3, _>(CubicSpline);
+        check::<2, _>(WendlandC2);
+        check::<3, _>(WendlandC2);
     }
 }

@@ -120,33 +120,65 @@ pub struct ParticleRates<const D: usize> {
 #[derive(Debug, Default, Clone)]
 pub struct Rates<const D: usize> {
     pub particles: Vec<ParticleRates<D>>,
-    /// What the pass reads of each neighbour (all particles, ghosts included), packed into one
-    /// record so that a neighbour costs one bounds check and few cache lines.
+    /// What the pass reads of each neighbour (all particles, ghosts included, and one
+    /// [`Gather::padding`] record at the end), packed into one record so that a neighbour costs
+    /// one bounds check and few cache lines.
     gather: Vec<Gather<D>>,
-    /// Per-particle artificial stress R (all particles, ghosts included; empty when no
-    /// material uses it).
+    /// Per-particle artificial stress R (all particles, ghosts included, and a zero at the end
+    /// for the padding; empty when no material uses it).
     art: Vec<Tensor<D>>,
 }
 
+/// Neighbours go through the conservation equations this many at a time, one lane each: the
+/// sums are written lane by lane over fixed-size arrays with no branches, which the compiler
+/// turns into vector instructions (see [`compute_rates`]). The lane count is fixed, not taken
+/// from the machine, so that every machine adds the same numbers in the same order.
+const LANES: usize = 4;
+/// In-support neighbours are collected in batches of this many (a multiple of `LANES`) before
+/// their sums, on the stack.
+const BATCH: usize = 64;
+
 /// A particle as its neighbours see it in the pass, in plain arrays: the pair loop is the
-/// hot spot of the code, and fixed-size loops over `D` compile to straight-line arithmetic
-/// (half the instructions of the same sums on nalgebra's generic small matrices).
+/// hot spot of the code, and fixed-size loops over `D` compile to straight-line arithmetic.
+/// What the neighbour filter reads (x, h, body) comes first, in one cache line.
 #[derive(Debug, Clone, Copy)]
 struct Gather<const D: usize> {
-    /// σ/ρ², row by row.
-    sr2: [[f64; D]; D],
     x: [f64; D],
+    h: f64,
+    body: u32,
+    /// Initial spacing Δp = h0/ratio.
+    dp: f64,
     v: [f64; D],
     u: [f64; D],
-    h: f64,
     m: f64,
     /// V = m/ρ.
     vol: f64,
     rho: f64,
     c: f64,
-    /// Initial spacing Δp = h0/ratio.
-    dp: f64,
-    body: u32,
+    /// σ/ρ², row by row.
+    sr2: [[f64; D]; D],
+}
+
+impl<const D: usize> Gather<D> {
+    /// The neighbour that fills the unused lanes of the last chunk: massless, at rest and far
+    /// beyond every support, so that all its terms are exactly zero (and finite).
+    fn padding() -> Self {
+        Gather {
+            x: [1e100; D],
+            h: 0.0,
+            body: u32::MAX,
+            // So that the artificial stress's W(Δp_avg) with any particle is positive (Δp_avg
+            // is half the particle's own spacing) and f_ij = W_ij/W(Δp_avg) = 0.
+            dp: 0.0,
+            v: [0.0; D],
+            u: [0.0; D],
+            m: 0.0,
+            vol: 0.0,
+            rho: 1.0,
+            c: 0.0,
+            sr2: [[0.0; D]; D],
+        }
+    }
 }
 
 #[inline(always)]
@@ -171,6 +203,18 @@ pub fn compute_rates<const D: usize, K: Kernel>(
     model: &Model<D>,
     out: &mut Rates<D>,
 ) {
+    compute_rates_on(kernel, p, nl, model, out, wide_lanes());
+}
+
+/// [`compute_rates`], on 256-bit vectors (`wide`, where [`wide_lanes`]) or portable code.
+fn compute_rates_on<const D: usize, K: Kernel>(
+    kernel: K,
+    p: &Particles<D>,
+    nl: &NeighborList,
+    model: &Model<D>,
+    out: &mut Rates<D>,
+    wide: bool,
+) {
     let all = p.len();
     let ratio = model.smoothing_ratio;
     let any_art = model
@@ -181,19 +225,20 @@ pub fn compute_rates<const D: usize, K: Kernel>(
     out.gather.par_extend((0..all).into_par_iter().map(|i| {
         let sr2 = p.stress(i) / (p.rho[i] * p.rho[i]);
         Gather {
-            sr2: std::array::from_fn(|a| std::array::from_fn(|b| sr2[(a, b)])),
             x: arr(&p.x[i]),
+            h: p.h[i],
+            body: p.body[i],
+            dp: p.h0[i] / ratio,
             v: arr(&p.v[i]),
             u: arr(&p.u[i]),
-            h: p.h[i],
             m: p.m[i],
             vol: p.m[i] / p.rho[i],
             rho: p.rho[i],
             c: p.c[i],
-            dp: p.h0[i] / ratio,
-            body: p.body[i],
+            sr2: std::array::from_fn(|a| std::array::from_fn(|b| sr2[(a, b)])),
         }
     }));
+    out.gather.push(Gather::padding());
     out.art.clear();
     if any_art {
         out.art.par_extend((0..all).into_par_iter().map(|i| {
@@ -202,19 +247,110 @@ pub fn compute_rates<const D: usize, K: Kernel>(
                 None => Tensor::<D>::zeros(),
             }
         }));
+        out.art.push(Tensor::<D>::zeros());
     }
     let (gather, art) = (&out.gather, &out.art);
-    out.particles.clear();
-    out.particles.par_extend(
-        (0..p.n_real)
-            .into_par_iter()
-            .map(|i| particle_rates(kernel, i, &nl.lists[i], gather, art, model)),
+    assert!(
+        !wide || wide_lanes(),
+        "AVX2 pass asked for on a CPU without AVX2"
     );
+    out.particles.clear();
+    out.particles
+        .par_extend((0..p.n_real).into_par_iter().map(|i| {
+            let list = &nl.lists[i];
+            match (wide, any_art) {
+                #[cfg(target_arch = "x86_64")]
+                (true, false) => {
+                    // SAFETY: the CPU has AVX2 (asserted above).
+                    unsafe {
+                        particle_rates_avx2::<D, K, false>(kernel, i, list, gather, art, model)
+                    }
+                }
+                #[cfg(target_arch = "x86_64")]
+                (true, true) => {
+                    // SAFETY: as above.
+                    unsafe {
+                        particle_rates_avx2::<D, K, true>(kernel, i, list, gather, art, model)
+                    }
+                }
+                (_, false) => particle_rates::<D, K, false>(kernel, i, list, gather, art, model),
+                (_, true) => particle_rates::<D, K, true>(kernel, i, list, gather, art, model),
+            }
+        }));
+}
+
+/// Whether the CPU has 256-bit vectors (AVX2), so that the pass can run its `LANES` lanes in
+/// one register instead of two. Both builds add the same numbers in the same order (no fused
+/// multiply-adds: Rust never contracts a·b + c), so the results are bit-identical.
+fn wide_lanes() -> bool {
+    #[cfg(target_arch = "x86_64")]
+    {
+        std::is_x86_feature_detected!("avx2")
+    }
+    #[cfg(not(target_arch = "x86_64"))]
+    {
+        false
+    }
+}
+
+/// [`particle_rates`] compiled for AVX2.
+#[cfg(target_arch = "x86_64")]
+#[target_feature(enable = "avx2")]
+fn particle_rates_avx2<const D: usize, K: Kernel, const ART: bool>(
+    kernel: K,
+    i: usize,
+    neighbors: &[u32],
+    gather: &[Gather<D>],
+    art: &[Tensor<D>],
+    model: &Model<D>,
+) -> ParticleRates<D> {
+    particle_rates::<D, K, ART>(kernel, i, neighbors, gather, art, model)
+}
+
+/// The conservation sums of one particle, one accumulator per lane (added up in lane order at
+/// the end).
+struct LaneSums<const D: usize> {
+    acc: [[f64; LANES]; D],
+    grad_v: [[[f64; LANES]; D]; D],
+    drho: [f64; LANES],
+    de: [f64; LANES],
+    de_lag: [f64; LANES],
+    mu_max: [f64; LANES],
+    v2_max: [f64; LANES],
+}
+
+impl<const D: usize> LaneSums<D> {
+    fn new() -> Self {
+        LaneSums {
+            acc: [[0.0; LANES]; D],
+            grad_v: [[[0.0; LANES]; D]; D],
+            drho: [0.0; LANES],
+            de: [0.0; LANES],
+            de_lag: [0.0; LANES],
+            mu_max: [0.0; LANES],
+            v2_max: [0.0; LANES],
+        }
+    }
+}
+
+#[inline(always)]
+fn lane_sum(a: &[f64; LANES]) -> f64 {
+    a.iter().sum()
+}
+
+#[inline(always)]
+fn lane_max(a: &[f64; LANES]) -> f64 {
+    a.iter().copied().fold(0.0, f64::max)
 }
 
 /// One real particle's sums over its neighbours (see the module doc for the equations).
+///
+/// A first loop sorts the neighbour list: those beyond the support are dropped, those in
+/// contact get eq. (5) at once (few: only at interfaces), and the rest are queued, without a
+/// branch, for the conservation equations, which [`conserve_chunk`] evaluates `LANES` at a
+/// time. The last chunk is filled up with the padding record.
 #[inline(always)]
-fn particle_rates<const D: usize, K: Kernel>(
+fn particle_rates<const D: usize, K: Kernel, const ART: bool>(
     kernel: K,
     i: usize,
     neighbors: &[u32],
@@ -223,125 +359,247 @@ fn particle_rates<const D: usize, K: Kernel>(
     model: &Model<D>,
 ) -> ParticleRates<D> {
     let gi = &gather[i];
-    let (xi, vi, ui, hi, bi, rho_i, ci) = (gi.x, gi.v, gi.u, gi.h, gi.body, gi.rho, gi.c);
-    let (alpha, beta) = (model.alpha, model.beta);
-    let art_i = art.get(i).copied();
+    let (xi, hi, bi) = (gi.x, gi.h, gi.body);
+    let padding = (gather.len() - 1) as u32;
 
-    let mut acc = [0.0; D];
+    let mut sums = LaneSums::<D>::new();
     let mut fc = [0.0; D];
-    let mut l = [[0.0; D]; D];
-    let mut drho = 0.0;
-    let mut de = 0.0;
-    let mut de_lag = 0.0;
     let mut phi = 0.0;
     let mut k_contact = 0.0;
-    let mut mu_max = 0.0_f64;
-    let mut v2_max = 0.0_f64;
     let mut gap = f64::INFINITY;
     let mut count = 0u32;
+    let mut queue = [padding; BATCH];
+    let mut queued = 0;
 
     for &j in neighbors {
         let gj = &gather[j as usize];
         let xij: [f64; D] = std::array::from_fn(|k| xi[k] - gj.x[k]);
         let r2 = dot(&xij, &xij);
         let support = hi + gj.h;
-        if r2 >= support * support || r2 == 0.0 {
-            continue;
-        }
-        count += 1;
-        let r = r2.sqrt();
-        let hij = 0.5 * support;
-        let gf = kernel.grad_factor::<D>(r, hij);
-        let grad: [f64; D] = std::array::from_fn(|k| xij[k] * gf);
-        let vij: [f64; D] = std::array::from_fn(|k| vi[k] - gj.v[k]);
-        v2_max = v2_max.max(dot(&vij, &vij));
+        let inside = r2 < support * support && r2 > 0.0;
         if gj.body != bi {
-            gap = gap.min(r / (0.5 * (gi.dp + gj.dp)));
-        }
-        match model.pairs.rule(bi, gj.body) {
-            PairRule::Conserve => {
-                let mj = gj.m;
-                drho += mj * dot(&vij, &grad);
-                for a in 0..D {
-                    let va = vij[a] * gj.vol;
-                    for b in 0..D {
-                        l[a][b] -= va * grad[b];
-                    }
-                }
-                let (pi, mu) = viscosity::monaghan_gingold(
-                    dot(&vij, &xij),
-                    r2,
-                    hij,
-                    0.5 * (ci + gj.c),
-                    0.5 * (rho_i + gj.rho),
-                    alpha,
-                    beta,
-                );
-                mu_max = mu_max.max(-mu);
-                // T_ij ∇W = (σ_i/ρ_i² + σ_j/ρ_j²) ∇W − Π_ij ∇W (+ A_ij ∇W).
-                let mut tg: [f64; D] = std::array::from_fn(|a| {
-                    let mut t = -pi * grad[a];
-                    for (b, g) in grad.iter().enumerate() {
-                        t += (gi.sr2[a][b] + gj.sr2[a][b]) * g;
-                    }
-                    t
-                });
-                if let Some(art_i) = art_i {
-                    let r_ij = art_i + art[j as usize];
-                    if r_ij != Tensor::<D>::zeros() {
-                        let dp = 0.5 * (gi.dp + gj.dp);
-                        let f = kernel.w::<D>(r, hij) / kernel.w::<D>(dp, hij);
-                        let fa = f.powi(artificial_stress::EXPONENT);
-                        for a in 0..D {
-                            for b in 0..D {
-                                tg[a] += r_ij[(a, b)] * fa * grad[b];
-                            }
-                        }
-                    }
-                }
-                let mut vtg = 0.0;
-                let mut utg = 0.0;
-                for a in 0..D {
-                    acc[a] += tg[a] * mj;
-                    vtg += vij[a] * tg[a];
-                    utg += (ui[a] - gj.u[a]) * tg[a];
-                }
-                de -= 0.5 * mj * vtg;
-                de_lag -= 0.5 * mj * utg;
+            if !inside {
+                continue;
             }
-            PairRule::Contact(params) => {
+            let r = r2.sqrt();
+            gap = gap.min(r / (0.5 * (gi.dp + gj.dp)));
+            if let PairRule::Contact(params) = model.pairs.rule(bi, gj.body) {
+                count += 1;
+                let hij = 0.5 * support;
+                let gf = kernel.grad_factor::<D>(r, hij);
                 let (coef, pot, k) =
                     contact::pair::<D, K>(kernel, params, gi.vol, gj.vol, r, hij, gf * r);
                 for a in 0..D {
-                    fc[a] += grad[a] * coef;
+                    fc[a] += xij[a] * gf * coef;
                 }
                 phi += 0.5 * pot;
                 k_contact += k;
+                continue;
             }
         }
+        queue[queued] = j;
+        queued += inside as usize;
+        if queued == BATCH {
+            for chunk in queue.chunks_exact(LANES) {
+                conserve_chunk::<D, K, ART>(kernel, i, chunk, gather, art, model, &mut sums);
+            }
+            count += BATCH as u32;
+            queued = 0;
+        }
+    }
+    count += queued as u32;
+    let used = queued.div_ceil(LANES) * LANES;
+    queue[queued..used].fill(padding);
+    for chunk in queue[..used].chunks_exact(LANES) {
+        conserve_chunk::<D, K, ART>(kernel, i, chunk, gather, art, model, &mut sums);
     }
 
     let mi = gi.m;
+    let ci = gi.c;
+    let (alpha, beta) = (model.alpha, model.beta);
     let fc = Vector::<D>::from_fn(|k, _| fc[k]);
     // Time step Δt_i = C h_i / (c_i + max_j |v_ij| + 0.6 (α c_i + β max_j |μ_ij|)) (Monaghan
     // 1992), and the contact springs (ω² = Σk/m, leapfrog stable for ω Δt < 2). DESIGN.md's
     // |v_i| is taken as the largest speed relative to a neighbour, its Galilean-invariant form:
     // a body flying at 7 km/s in one piece needs no shorter step, two meeting at 7 km/s do.
-    let signal = ci + v2_max.sqrt() + 0.6 * (alpha * ci + beta * mu_max);
+    let signal =
+        ci + lane_max(&sums.v2_max).sqrt() + 0.6 * (alpha * ci + beta * lane_max(&sums.mu_max));
     let mut dt = model.cfl * hi / signal;
     if k_contact > 0.0 {
         dt = dt.min(model.cfl * 2.0 * (mi / k_contact).sqrt());
     }
+    let acc = Vector::<D>::from_fn(|k, _| lane_sum(&sums.acc[k]));
     ParticleRates {
-        acc: Vector::<D>::from_fn(|k, _| acc[k]) + fc / mi + model.gravity,
-        drho,
-        de,
-        de_lag,
-        grad_v: Tensor::<D>::from_fn(|a, b| l[a][b]),
+        acc: acc + fc / mi + model.gravity,
+        drho: lane_sum(&sums.drho),
+        de: lane_sum(&sums.de),
+        de_lag: lane_sum(&sums.de_lag),
+        grad_v: Tensor::<D>::from_fn(|a, b| lane_sum(&sums.grad_v[a][b])),
         contact_force: fc,
         contact_energy: phi,
         dt,
         min_interbody_gap: gap,
         neighbors: count,
+    }
+}
+
+/// The conservation terms of particle i with `LANES` neighbours `js`, one per lane, added to
+/// the lane sums. Straight-line arithmetic with selects only (the kernel gradient is 0 beyond
+/// the support, which zeroes every term of the padding record), so that it vectorises.
+#[inline(always)]
+#[allow(clippy::needless_range_loop)] // index loops over lanes and axes read as the equations
+fn conserve_chunk<const D: usize, K: Kernel, const ART: bool>(
+    kernel: K,
+    i: usize,
+    js: &[u32],
+    gather: &[Gather<D>],
+    art: &[Tensor<D>],
+    model: &Model<D>,
+    s: &mut LaneSums<D>,
+) {
+    let gi = &gather[i];
+    let g: [&Gather<D>; LANES] = std::array::from_fn(|l| &gather[js[l] as usize]);
+    let (alpha, beta) = (model.alpha, model.beta);
+    for l in 0..LANES {
+        let gj = g[l];
+        let xij: [f64; D] = std::array::from_fn(|k| gi.x[k] - gj.x[k]);
+        let r2 = dot(&xij, &xij);
+        let hij = 0.5 * (gi.h + gj.h);
+        let r = r2.sqrt();
+        let gf = kernel.grad_factor::<D>(r, hij);
+        let grad: [f64; D] = std::array::from_fn(|k| xij[k] * gf);
+        let vij: [f64; D] = std::array::from_fn(|k| gi.v[k] - gj.v[k]);
+        let near = r < 2.0 * hij;
+        let v2 = if near { dot(&vij, &vij) } else { 0.0 };
+        s.v2_max[l] = s.v2_max[l].max(v2);
+        let mj = gj.m;
+        s.drho[l] += mj * dot(&vij, &grad);
+        for a in 0..D {
+            let va = vij[a] * gj.vol;
+            for b in 0..D {
+                s.grad_v[a][b][l] -= va * grad[b];
+            }
+        }
+        let (pi, mu) = viscosity::monaghan_gingold(
+            dot(&vij, &xij),
+            r2,
+            hij,
+            0.5 * (gi.c + gj.c),
+            0.5 * (gi.rho + gj.rho),
+            alpha,
+            beta,
+        );
+        let mu = if near { mu } else { 0.0 };
+        s.mu_max[l] = s.mu_max[l].max(-mu);
+        // T_ij ∇W = (σ_i/ρ_i² + σ_j/ρ_j²) ∇W − Π_ij ∇W (+ A_ij ∇W).
+        let mut tg: [f64; D] = std::array::from_fn(|a| {
+            let mut t = -pi * grad[a];
+            for (b, gb) in grad.iter().enumerate() {
+                t += (gi.sr2[a][b] + gj.sr2[a][b]) * gb;
+            }
+            t
+        });
+        if ART {
+            let r_ij = art[i] + art[js[l] as usize];
+            let dp = 0.5 * (gi.dp + gj.dp);
+            let f = kernel.w::<D>(r, hij) / kernel.w::<D>(dp, hij);
+            let fa = f.powi(artificial_stress::EXPONENT);
+            for a in 0..D {
+                for b in 0..D {
+                    tg[a] += r_ij[(a, b)] * fa * grad[b];
+                }
+            }
+        }
+        let mut vtg = 0.0;
+        let mut utg = 0.0;
+        for a in 0..D {
+            s.acc[a][l] += tg[a] * mj;
+            vtg += vij[a] * tg[a];
+            utg += (gi.u[a] - gj.u[a]) * tg[a];
+        }
+        s.de[l] -= 0.5 * mj * vtg;
+        s.de_lag[l] -= 0.5 * mj * utg;
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::kernel::CubicSpline;
+    use crate::particles::Tensor;
+
+    /// The AVX2 build of the pass adds the same numbers in the same order as the portable one,
+    /// so a run gives the same bits on any x86-64 machine. Two bodies in contact with a welded
+    /// third, artificial stress on, and a disordered state so that every term is non-zero.
+    #[test]
+    fn vector_and_portable_passes_agree_bit_for_bit() {
+        if !wide_lanes() {
+            eprintln!("no AVX2 on this CPU: only the portable pass exists");
+            return;
+        }
+        let deck = r#"
+[simulation]
+name = "lanes"
+dimension = 3
+end_time = 1.0
+[materials.al]
+density = 2700.0
+eos = { type = "linear" }
+strength = { type = "elastic", youngs_modulus = 68.9e9, poissons_ratio = 0.33 }
+artificial_stress = 0.3
+[[body]]
+name = "a"
+material = "al"
+spacing = 1.0e-3
+velocity = [50.0, 0.0, 0.0]
+shape = { type = "box", min = [-0.005, 0.0, 0.0], max = [0.0, 0.005, 0.005] }
+[[body]]
+name = "b"
+material = "al"
+spacing = 1.0e-3
+shape = { type = "box", min = [0.001, 0.0, 0.0], max = [0.006, 0.005, 0.005] }
+[[body]]
+name = "c"
+material = "al"
+spacing = 1.0e-3
+shape = { type = "box", min = [0.001, 0.006, 0.0], max = [0.006, 0.011, 0.005] }
+[[interaction]]
+bodies = ["b", "c"]
+type = "welded"
+"#;
+        let case = crate::deck::parse(deck, "lanes.toml").unwrap();
+        let (mut p, model) = crate::setup::build::<3>(&case).unwrap();
+        let mut seed = 99u64;
+        let mut rnd = || {
+            seed = seed
+                .wrapping_mul(6364136223846793005)
+                .wrapping_add(1442695040888963407);
+            (seed >> 11) as f64 / (1u64 << 53) as f64 - 0.5
+        };
+        for i in 0..p.len() {
+            for k in 0..3 {
+                p.x[i][k] += 2e-4 * rnd();
+                p.v[i][k] += 30.0 * rnd();
+                p.u[i][k] = 0.1 * rnd();
+            }
+            p.rho[i] *= 1.0 + 0.05 * rnd();
+            p.p[i] = 1e8 * rnd();
+            p.c[i] = 5000.0 * (1.0 + 0.1 * rnd());
+            let s = Tensor::<3>::from_fn(|_, _| 1e8 * rnd());
+            p.s[i] = (s + s.transpose()) * 0.5;
+        }
+        let mut nl = NeighborList::default();
+        nl.build(&p.x, &p.h, p.n_real, 0.1 * p.h[0]);
+        let (mut wide, mut portable) = (Rates::default(), Rates::default());
+        compute_rates_on(CubicSpline, &p, &nl, &model, &mut wide, true);
+        compute_rates_on(CubicSpline, &p, &nl, &model, &mut portable, false);
+        assert!(wide.particles.iter().any(|r| r.contact_force.norm() > 0.0));
+        assert!(wide
+            .particles
+            .iter()
+            .all(|r| r.acc.norm() > 0.0 && r.de != 0.0));
+        for (i, (a, b)) in wide.particles.iter().zip(&portable.particles).enumerate() {
+            assert_eq!(a, b, "particle {i}");
+        }
     }
 }

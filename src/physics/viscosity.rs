@@ -16,8 +16,11 @@ pub fn monaghan_gingold(
 ) -> (f64, f64) {
     // Branch-free: μ = 0 for separating pairs gives Π = 0 (the sign of v_ij·x_ij is close to
     // random from pair to pair, and a mispredicted branch costs more than the arithmetic).
-    let mu = h * vdotx.min(0.0) / (r2 + 0.01 * h * h);
-    ((-alpha * c_mean * mu + beta * mu * mu) / rho_mean, mu)
+    // One division: with d = 1/(den ρ̄), μ = h (v·x) ρ̄ d and 1/ρ̄ = den d.
+    let den = r2 + 0.01 * h * h;
+    let d = 1.0 / (den * rho_mean);
+    let mu = h * vdotx.min(0.0) * rho_mean * d;
+    ((-alpha * c_mean * mu + beta * mu * mu) * (den * d), mu)
 }
 
 #[cfg(test)]
