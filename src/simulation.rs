@@ -11,6 +11,7 @@ use crate::neighbors::NeighborList;
 use crate::particles::{to3, Particles};
 use crate::physics::{self, Model, Rates};
 use crate::setup;
+use rayon::prelude::*;
 
 /// Global quantities at t_n (the start of the step that produced them).
 #[derive(Debug, Clone, Default, PartialEq, serde::Serialize, serde::Deserialize)]
@@ -55,6 +56,10 @@ pub struct Simulation<const D: usize> {
     ghosts: boundary::Ghosts,
     rates: Rates<D>,
     order: Vec<usize>,
+    /// Work buffers of the per-step sums (one entry per block of `BLOCK` particles).
+    sums_old: Vec<Sums>,
+    sums_new: Vec<Sums>,
+    body_force_blocks: Vec<[f64; 3]>,
     /// Search at the next step whatever the skin says (after a checkpoint, so that a resumed
     /// run, which must search first, stays bit-identical).
     force_search: bool,
@@ -76,6 +81,81 @@ pub struct SimState {
     pub searches: u64,
     /// Step of the last reordering into cell order.
     pub last_reorder: u64,
+}
+
+/// Sums over the particles are taken per block of this many particles, in parallel, and the
+/// blocks' sums are then added in block order: the same additions whatever the thread count.
+const BLOCK: usize = 2048;
+
+/// Partial sums of one block of particles (see [`block_sums`]).
+#[derive(Debug, Clone, Copy)]
+struct Sums {
+    /// ½ Σ m |v^{n±½}|², Σ m e^{n±½}, Σ m v^{n±½}, Σ m |v^{n±½}|.
+    kinetic: f64,
+    internal: f64,
+    momentum: [f64; 3],
+    momentum_scale: f64,
+    contact: f64,
+    gravity: f64,
+    max_pressure: f64,
+    gap: f64,
+}
+
+impl Default for Sums {
+    fn default() -> Self {
+        Sums {
+            kinetic: 0.0,
+            internal: 0.0,
+            momentum: [0.0; 3],
+            momentum_scale: 0.0,
+            contact: 0.0,
+            gravity: 0.0,
+            max_pressure: f64::NEG_INFINITY,
+            gap: f64::INFINITY,
+        }
+    }
+}
+
+impl Sums {
+    /// Add particle i's kinetic and internal energy and momentum at the half step.
+    #[inline]
+    fn add_half_step<const D: usize>(&mut self, p: &Particles<D>, i: usize) {
+        self.kinetic += 0.5 * p.m[i] * p.vh[i].norm_squared();
+        self.internal += p.m[i] * p.eh[i];
+        let mv = to3(&(p.vh[i] * p.m[i]));
+        for (sum, c) in self.momentum.iter_mut().zip(mv) {
+            *sum += c;
+        }
+    }
+
+    fn merge(mut self, o: &Sums) -> Sums {
+        self.kinetic += o.kinetic;
+        self.internal += o.internal;
+        for k in 0..3 {
+            self.momentum[k] += o.momentum[k];
+        }
+        self.momentum_scale += o.momentum_scale;
+        self.contact += o.contact;
+        self.gravity += o.gravity;
+        self.max_pressure = self.max_pressure.max(o.max_pressure);
+        self.gap = self.gap.min(o.gap);
+        self
+    }
+}
+
+/// `f` over the blocks of `BLOCK` particles of 0..n in parallel (into `scratch`), then the
+/// blocks merged in order.
+fn block_sums(
+    n: usize,
+    scratch: &mut Vec<Sums>,
+    f: impl Fn(std::ops::Range<usize>) -> Sums + Sync,
+) -> Sums {
+    scratch.resize(n.div_ceil(BLOCK), Sums::default());
+    scratch
+        .par_iter_mut()
+        .enumerate()
+        .for_each(|(b, s)| *s = f(b * BLOCK..n.min((b + 1) * BLOCK)));
+    scratch.iter().fold(Sums::default(), |a, s| a.merge(s))
 }
 
 /// Real particles are put back in cell order at least this often (steps), for memory locality.
@@ -111,6 +191,9 @@ impl<const D: usize> Simulation<D> {
             ghosts: boundary::Ghosts::default(),
             rates: Rates::default(),
             order: Vec::new(),
+            sums_old: Vec::new(),
+            sums_new: Vec::new(),
+            body_force_blocks: Vec::new(),
             force_search: false,
         })
     }
@@ -176,13 +259,13 @@ impl<const D: usize> Simulation<D> {
         }
         let n = p.n_real;
         // The stable step, its growth limited to 25 % a step; the collapse check uses it before
-        // it is shortened to land on an output time.
+        // it is shortened to land on an output time. (min and max are exact in any order.)
         let mut dt_stable = self
             .rates
             .particles
-            .iter()
+            .par_iter()
             .map(|r| r.dt)
-            .fold(f64::INFINITY, f64::min);
+            .reduce(|| f64::INFINITY, f64::min);
         if self.state.dt_prev > 0.0 {
             dt_stable = dt_stable.min(1.25 * self.state.dt_prev);
         }
@@ -190,41 +273,55 @@ impl<const D: usize> Simulation<D> {
         let dt = dt_stable.min(dt_max);
         self.check(dt, dt_stable, dt_first)?;
 
+        let bodies = self.body_names.len();
+        let p = &self.particles;
+        let rates = &self.rates.particles;
+        let g = self.model.gravity;
+        let old = block_sums(n, &mut self.sums_old, |range| {
+            let mut s = Sums::default();
+            for i in range {
+                s.add_half_step(p, i);
+                s.contact += rates[i].contact_energy;
+                s.gravity -= p.m[i] * g.dot(&p.x[i]);
+                s.max_pressure = s.max_pressure.max(p.p[i]);
+                s.gap = s.gap.min(rates[i].min_interbody_gap);
+            }
+            s
+        });
+        // Contact force per body, by the same blocks.
+        self.body_force_blocks
+            .resize(n.div_ceil(BLOCK) * bodies, [0.0; 3]);
+        self.body_force_blocks
+            .par_chunks_mut(bodies.max(1))
+            .enumerate()
+            .for_each(|(b, fb)| {
+                fb.fill([0.0; 3]);
+                for i in b * BLOCK..n.min((b + 1) * BLOCK) {
+                    let f = to3(&rates[i].contact_force);
+                    let fb = &mut fb[p.body[i] as usize];
+                    for k in 0..3 {
+                        fb[k] += f[k];
+                    }
+                }
+            });
         let mut d = Diagnostics {
             time: self.state.time,
             dt,
-            body_contact_force: vec![[0.0; 3]; self.body_names.len()],
-            interactions: self
-                .rates
-                .particles
-                .iter()
-                .map(|r| r.neighbors as usize)
-                .sum(),
-            max_pressure: f64::NEG_INFINITY,
+            body_contact_force: vec![[0.0; 3]; bodies],
+            interactions: rates.par_iter().map(|r| r.neighbors as usize).sum(),
+            contact: old.contact,
+            gravity: old.gravity,
+            max_pressure: old.max_pressure,
+            min_interbody_distance: old.gap.is_finite().then_some(old.gap),
             ..Default::default()
         };
-        let p = &self.particles;
-        let g = self.model.gravity;
-        let mut gap = f64::INFINITY;
-        let (mut ke_old, mut ie_old, mut mom_old) = (0.0, 0.0, [0.0; 3]);
-        for i in 0..n {
-            ie_old += p.m[i] * p.eh[i];
-            d.contact += self.rates.particles[i].contact_energy;
-            d.gravity -= p.m[i] * g.dot(&p.x[i]);
-            d.max_pressure = d.max_pressure.max(p.p[i]);
-            gap = gap.min(self.rates.particles[i].min_interbody_gap);
-            let f = to3(&self.rates.particles[i].contact_force);
-            let fb = &mut d.body_contact_force[p.body[i] as usize];
-            for k in 0..3 {
-                fb[k] += f[k];
-            }
-            ke_old += 0.5 * p.m[i] * p.vh[i].norm_squared();
-            let mv = to3(&(p.vh[i] * p.m[i]));
-            for k in 0..3 {
-                mom_old[k] += mv[k];
+        for block in self.body_force_blocks.chunks_exact(bodies.max(1)) {
+            for (sum, f) in d.body_contact_force.iter_mut().zip(block) {
+                for k in 0..3 {
+                    sum[k] += f[k];
+                }
             }
         }
-        d.min_interbody_distance = gap.is_finite().then_some(gap);
 
         integrate::advance(
             &mut self.particles,
@@ -236,26 +333,25 @@ impl<const D: usize> Simulation<D> {
         boundary::reflect_crossed(&mut self.particles, &self.symmetry);
 
         let p = &self.particles;
-        let (mut ke_new, mut ie_new, mut mom_new) = (0.0, 0.0, [0.0; 3]);
-        for i in 0..n {
-            ke_new += 0.5 * p.m[i] * p.vh[i].norm_squared();
-            ie_new += p.m[i] * p.eh[i];
-            let mv = to3(&(p.vh[i] * p.m[i]));
-            for k in 0..3 {
-                mom_new[k] += mv[k];
+        let new = block_sums(n, &mut self.sums_new, |range| {
+            let mut s = Sums::default();
+            for i in range {
+                s.add_half_step(p, i);
+                s.momentum_scale += p.m[i] * p.vh[i].norm();
             }
-            d.momentum_scale += p.m[i] * p.vh[i].norm();
-        }
+            s
+        });
+        d.momentum_scale = new.momentum_scale;
         // Whole-step values are the means of the half-step ones; the first step starts from
         // v^0 and e^0 themselves.
         if self.state.step == 0 {
-            d.kinetic = ke_old;
-            d.internal = ie_old;
-            d.momentum = mom_old;
+            d.kinetic = old.kinetic;
+            d.internal = old.internal;
+            d.momentum = old.momentum;
         } else {
-            d.kinetic = 0.5 * (ke_old + ke_new);
-            d.internal = 0.5 * (ie_old + ie_new);
-            d.momentum = [0, 1, 2].map(|k| 0.5 * (mom_old[k] + mom_new[k]));
+            d.kinetic = 0.5 * (old.kinetic + new.kinetic);
+            d.internal = 0.5 * (old.internal + new.internal);
+            d.momentum = [0, 1, 2].map(|k| 0.5 * (old.momentum[k] + new.momentum[k]));
         }
         d.total = d.kinetic + d.internal + d.contact + d.gravity;
         self.state.time += dt;
@@ -270,7 +366,7 @@ impl<const D: usize> Simulation<D> {
         let p = &self.particles;
         let r = &self.rates.particles;
         // The state first (a bad particle spoils its neighbours' rates), then the rates.
-        let state = (0..p.n_real).find_map(|i| {
+        let state = (0..p.n_real).into_par_iter().find_map_first(|i| {
             let finite = p.x[i].iter().all(|c| c.is_finite())
                 && p.v[i].iter().all(|c| c.is_finite())
                 && p.rho[i].is_finite()
@@ -290,7 +386,7 @@ impl<const D: usize> Simulation<D> {
             }
         });
         let bad = state.or_else(|| {
-            (0..p.n_real).find_map(|i| {
+            (0..p.n_real).into_par_iter().find_map_first(|i| {
                 if !(r[i].acc.iter().all(|c| c.is_finite())
                     && r[i].drho.is_finite()
                     && r[i].de.is_finite()
