@@ -8,6 +8,7 @@
 //! works across a symmetry plane.
 
 use crate::particles::Particles;
+use rayon::prelude::*;
 
 /// A symmetry plane x_axis = position; the model lives on the side `side` (+1: x_axis ≥ c,
 /// −1: x_axis ≤ c).
@@ -29,6 +30,9 @@ impl Plane {
 #[derive(Debug, Clone, Default)]
 pub struct Ghosts {
     map: Vec<(usize, usize)>,
+    /// For each plane, whether each particle there when it was mirrored (the real ones and
+    /// the ghosts of earlier planes) got a ghost in it.
+    mirrored: Vec<Vec<bool>>,
 }
 
 impl Ghosts {
@@ -36,16 +40,32 @@ impl Ghosts {
     pub fn rebuild<const D: usize>(&mut self, p: &mut Particles<D>, planes: &[Plane], reach: f64) {
         p.truncate_to_real();
         self.map.clear();
+        self.mirrored.resize_with(planes.len(), Vec::new);
         for (pi, plane) in planes.iter().enumerate() {
             let n = p.len();
+            self.mirrored[pi].clear();
             for i in 0..n {
-                if plane.depth(p.x[i][plane.axis]) < reach {
+                let near = plane.depth(p.x[i][plane.axis]) < reach;
+                self.mirrored[pi].push(near);
+                if near {
                     let g = p.push_copy(i);
                     mirror(p, g, plane.axis, plane.position);
                     self.map.push((i, pi));
                 }
             }
         }
+    }
+
+    /// Whether the ghosts still cover every particle within `reach` of a plane (each particle
+    /// without a ghost in a plane is still farther from it). Positions must be up to date
+    /// ([`Ghosts::update`]).
+    pub fn cover<const D: usize>(&self, p: &Particles<D>, planes: &[Plane], reach: f64) -> bool {
+        planes.iter().zip(&self.mirrored).all(|(plane, mirrored)| {
+            mirrored
+                .par_iter()
+                .enumerate()
+                .all(|(i, &m)| m || plane.depth(p.x[i][plane.axis]) >= reach)
+        })
     }
 
     /// Refresh the ghosts from the current state of their sources (same ghosts, same order).

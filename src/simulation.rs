@@ -7,7 +7,7 @@ use crate::case::{Case, KernelKind};
 use crate::error::{Error, Result};
 use crate::integrate;
 use crate::kernel::{CubicSpline, WendlandC2};
-use crate::neighbors::NeighborList;
+use crate::neighbors::{NeighborList, Refresh};
 use crate::particles::{to3, Particles};
 use crate::physics::{self, Model, Rates};
 use crate::setup;
@@ -77,8 +77,9 @@ pub struct SimState {
     pub dt_first: Option<f64>,
     /// A particle faster than this has gone unstable (m/s).
     pub speed_limit: f64,
-    /// Neighbour searches made so far.
+    /// Neighbour searches made so far: full builds, and partial rebuilds (see `neighbors`).
     pub searches: u64,
+    pub partial_searches: u64,
     /// Step of the last reordering into cell order.
     pub last_reorder: u64,
 }
@@ -185,6 +186,7 @@ impl<const D: usize> Simulation<D> {
                 // an incline) would trip that at once, so the sound speed bounds it from below.
                 speed_limit: 10.0 * v0.max(c0),
                 searches: 0,
+                partial_searches: 0,
                 last_reorder: 0,
             },
             neighbors: NeighborList::default(),
@@ -224,7 +226,23 @@ impl<const D: usize> Simulation<D> {
         // at the latest, when the real particles are also put back in cell order.
         self.ghosts.update(p, &self.symmetry);
         let reorder = self.state.step >= self.state.last_reorder + REORDER_EVERY;
-        if reorder || self.force_search || self.neighbors.stale(&p.x, &p.h) {
+        let mut need = if reorder || self.force_search {
+            Refresh::Full
+        } else {
+            self.neighbors.refresh(&p.x, &p.h)
+        };
+        if need == Refresh::Partial {
+            // Particles moved beyond the skin: the ghost layers must still reach 2 h_max.
+            let h_max = p.h.par_iter().copied().reduce(|| 0.0, f64::max);
+            if !self.ghosts.cover(p, &self.symmetry, 2.0 * h_max) {
+                need = Refresh::Full;
+            }
+        }
+        if need == Refresh::Partial {
+            self.neighbors.rebuild_dirty(&p.x, &p.h);
+            self.state.partial_searches += 1;
+        }
+        if need == Refresh::Full {
             self.force_search = false;
             if reorder && self.state.step > 0 {
                 let n = p.n_real;
