@@ -9,6 +9,7 @@
 
 use crate::particles::Particles;
 use rayon::prelude::*;
+use std::ops::Range;
 
 /// A symmetry plane x_axis = position; the model lives on the side `side` (+1: x_axis ≥ c,
 /// −1: x_axis ≤ c).
@@ -26,10 +27,12 @@ impl Plane {
     }
 }
 
-/// Which particle each ghost mirrors, and in which plane (ghost k is particle n_real + k).
+/// Which particle each ghost mirrors (ghost k is particle n_real + k); the ghosts of plane p
+/// are `first[p]..first[p + 1]` (counted from n_real).
 #[derive(Debug, Clone, Default)]
 pub struct Ghosts {
-    map: Vec<(usize, usize)>,
+    sources: Vec<usize>,
+    first: Vec<usize>,
     /// For each plane, whether each particle there when it was mirrored (the real ones and
     /// the ghosts of earlier planes) got a ghost in it.
     mirrored: Vec<Vec<bool>>,
@@ -39,21 +42,24 @@ impl Ghosts {
     /// Drop the old ghosts and make new ones for every particle within `reach` of a plane.
     pub fn rebuild<const D: usize>(&mut self, p: &mut Particles<D>, planes: &[Plane], reach: f64) {
         p.truncate_to_real();
-        self.map.clear();
+        self.sources.clear();
+        self.first.clear();
         self.mirrored.resize_with(planes.len(), Vec::new);
         for (pi, plane) in planes.iter().enumerate() {
             let n = p.len();
+            self.first.push(self.sources.len());
             self.mirrored[pi].clear();
             for i in 0..n {
                 let near = plane.depth(p.x[i][plane.axis]) < reach;
                 self.mirrored[pi].push(near);
                 if near {
-                    let g = p.push_copy(i);
-                    mirror(p, g, plane.axis, plane.position);
-                    self.map.push((i, pi));
+                    p.push_copy(i);
+                    self.sources.push(i);
                 }
             }
+            mirror(p, n..p.len(), plane.axis, plane.position);
         }
+        self.first.push(self.sources.len());
     }
 
     /// Whether the ghosts still cover every particle within `reach` of a plane (each particle
@@ -71,10 +77,17 @@ impl Ghosts {
     /// Refresh the ghosts from the current state of their sources (same ghosts, same order).
     pub fn update<const D: usize>(&self, p: &mut Particles<D>, planes: &[Plane]) {
         let n = p.n_real;
-        for (k, &(src, pi)) in self.map.iter().enumerate() {
-            let g = n + k;
-            p.copy(src, g);
-            mirror(p, g, planes[pi].axis, planes[pi].position);
+        // Plane by plane: a plane's ghosts mirror particles made before them. (No ghosts
+        // before the first rebuild.)
+        for (plane, w) in planes.iter().zip(self.first.windows(2)) {
+            let ghosts = w[0]..w[1];
+            p.copy_many(n + ghosts.start, &self.sources[ghosts.clone()]);
+            mirror(
+                p,
+                n + ghosts.start..n + ghosts.end,
+                plane.axis,
+                plane.position,
+            );
         }
     }
 }
@@ -88,9 +101,14 @@ impl Ghosts {
 /// conserved momentum are too.
 pub fn reflect_crossed<const D: usize>(p: &mut Particles<D>, planes: &[Plane]) {
     for plane in planes {
+        let crossed = |i: usize| plane.depth(p.x[i][plane.axis]) < 0.0;
+        // Rare: look in parallel, put back one by one.
+        if !(0..p.n_real).into_par_iter().any(crossed) {
+            continue;
+        }
         for i in 0..p.n_real {
             if plane.depth(p.x[i][plane.axis]) < 0.0 {
-                mirror(p, i, plane.axis, plane.position);
+                mirror(p, i..i + 1, plane.axis, plane.position);
             }
         }
     }
@@ -102,19 +120,34 @@ pub fn rebuild_ghosts<const D: usize>(p: &mut Particles<D>, planes: &[Plane]) {
     Ghosts::default().rebuild(p, planes, reach);
 }
 
-fn mirror<const D: usize>(p: &mut Particles<D>, g: usize, k: usize, c: f64) {
-    p.x[g][k] = 2.0 * c - p.x[g][k];
-    p.v[g][k] = -p.v[g][k];
-    p.vh[g][k] = -p.vh[g][k];
-    p.a[g][k] = -p.a[g][k];
-    p.u[g][k] = -p.u[g][k];
-    p.contact_force[g][k] = -p.contact_force[g][k];
-    for l in 0..D {
-        if l != k {
-            p.s[g][(k, l)] = -p.s[g][(k, l)];
-            p.s[g][(l, k)] = -p.s[g][(l, k)];
-        }
+/// Mirror particles `range` in the plane x_k = c (in parallel).
+fn mirror<const D: usize>(p: &mut Particles<D>, range: Range<usize>, k: usize, c: f64) {
+    const MIN: usize = 256;
+    let r = range;
+    p.x[r.clone()]
+        .par_iter_mut()
+        .with_min_len(MIN)
+        .for_each(|x| x[k] = 2.0 * c - x[k]);
+    for field in [
+        &mut p.v,
+        &mut p.vh,
+        &mut p.a,
+        &mut p.u,
+        &mut p.contact_force,
+    ] {
+        field[r.clone()]
+            .par_iter_mut()
+            .with_min_len(MIN)
+            .for_each(|v| v[k] = -v[k]);
     }
+    p.s[r].par_iter_mut().with_min_len(MIN).for_each(|s| {
+        for l in 0..D {
+            if l != k {
+                s[(k, l)] = -s[(k, l)];
+                s[(l, k)] = -s[(l, k)];
+            }
+        }
+    });
 }
 
 #[cfg(test)]

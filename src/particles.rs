@@ -4,6 +4,7 @@
 //! `boundary`, follow them. Physics loops run over real particles and read ghosts as neighbours.
 
 use nalgebra::{SMatrix, SVector};
+use rayon::prelude::*;
 
 /// A point or vector in D dimensions.
 pub type Vector<const D: usize> = SVector<f64, D>;
@@ -147,12 +148,21 @@ impl<const D: usize> Particles<D> {
         self.x.len() - 1
     }
 
-    /// Copy every field of particle `src` onto particle `dst`.
-    pub fn copy(&mut self, src: usize, dst: usize) {
-        macro_rules! copy {
-            ($($f:ident),*) => { $(self.$f[dst] = self.$f[src];)* };
+    /// Copy particle `sources[k]` onto particle `first + k` for every k, in parallel; every
+    /// source must lie below `first`.
+    pub fn copy_many(&mut self, first: usize, sources: &[usize]) {
+        fn apply<T: Copy + Send + Sync>(v: &mut [T], first: usize, sources: &[usize]) {
+            let (from, to) = v.split_at_mut(first);
+            to[..sources.len()]
+                .par_iter_mut()
+                .zip(sources)
+                .with_min_len(256)
+                .for_each(|(d, &s)| *d = from[s]);
         }
-        for_each_field!(copy);
+        macro_rules! copy_many {
+            ($($f:ident),*) => { $(apply(&mut self.$f, first, sources);)* };
+        }
+        for_each_field!(copy_many);
     }
 
     /// Reorder real particles by `order` (new position k holds old particle order[k]).
