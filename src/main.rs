@@ -58,6 +58,14 @@ enum Command {
     },
 }
 
+/// Print a line on stdout; a closed pipe (`strike bench | head`) is not an error.
+macro_rules! say {
+    ($($arg:tt)*) => {{
+        use std::io::Write;
+        let _ = writeln!(std::io::stdout().lock(), $($arg)*);
+    }};
+}
+
 fn main() -> std::process::ExitCode {
     tracing_subscriber::fmt()
         .with_env_filter(
@@ -108,24 +116,24 @@ fn main_inner() -> Result<(), Report> {
                 resume,
             };
             let summary = run::run(&c, &opts).map_err(|e| report(e, &case))?;
-            println!("{}", check::summary_text(&summary));
-            println!("output in {}", out_dir.display());
+            say!("{}", check::summary_text(&summary));
+            say!("output in {}", out_dir.display());
             Ok(())
         }
         Command::Bench { quick, json, cases } => {
             let report =
-                strike::bench::run_all(quick, &cases, |c| println!("{}", strike::bench::line(c)))
+                strike::bench::run_all(quick, &cases, |c| say!("{}", strike::bench::line(c)))
                     .map_err(|e| miette!("{e}"))?;
             let text = serde_json::to_string_pretty(&report).map_err(|e| miette!("{e}"))?;
             std::fs::write(&json, text + "\n")
                 .map_err(|e| miette!("cannot write {}: {e}", json.display()))?;
-            println!("written to {}", json.display());
+            say!("written to {}", json.display());
             Ok(())
         }
         Command::Check { case } => {
             let c = load(&case)?;
             let text = check::check(&c).map_err(|e| report(e, &case))?;
-            println!("{text}");
+            say!("{text}");
             Ok(())
         }
     }
