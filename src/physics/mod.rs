@@ -366,6 +366,7 @@ fn particle_rates<const D: usize, K: Kernel, const ART: bool>(
     let mut fc = [0.0; D];
     let mut phi = 0.0;
     let mut k_contact = 0.0;
+    let mut v2_contact = 0.0_f64;
     let mut gap = f64::INFINITY;
     let mut count = 0u32;
     let mut queue = [padding; BATCH];
@@ -394,6 +395,9 @@ fn particle_rates<const D: usize, K: Kernel, const ART: bool>(
                 }
                 phi += 0.5 * pot;
                 k_contact += k;
+                // Bodies closing on each other bound the step like any neighbour (below).
+                let vij: [f64; D] = std::array::from_fn(|k| gi.v[k] - gj.v[k]);
+                v2_contact = v2_contact.max(dot(&vij, &vij));
                 continue;
             }
         }
@@ -422,8 +426,8 @@ fn particle_rates<const D: usize, K: Kernel, const ART: bool>(
     // 1992), and the contact springs (ω² = Σk/m, leapfrog stable for ω Δt < 2). DESIGN.md's
     // |v_i| is taken as the largest speed relative to a neighbour, its Galilean-invariant form:
     // a body flying at 7 km/s in one piece needs no shorter step, two meeting at 7 km/s do.
-    let signal =
-        ci + lane_max(&sums.v2_max).sqrt() + 0.6 * (alpha * ci + beta * lane_max(&sums.mu_max));
+    let v_max = lane_max(&sums.v2_max).max(v2_contact).sqrt();
+    let signal = ci + v_max + 0.6 * (alpha * ci + beta * lane_max(&sums.mu_max));
     let mut dt = model.cfl * hi / signal;
     if k_contact > 0.0 {
         dt = dt.min(model.cfl * 2.0 * (mi / k_contact).sqrt());
@@ -601,5 +605,53 @@ type = "welded"
         for (i, (a, b)) in wide.particles.iter().zip(&portable.particles).enumerate() {
             assert_eq!(a, b, "particle {i}");
         }
+    }
+
+    /// Bodies closing on each other through the contact bound the time step by their relative
+    /// speed, as neighbours of one body do: Δt = C h / (c + |v_ij| + 0.6 α c) for two particles
+    /// of different bodies meeting at ±v (a soft contact, so that its springs do not set Δt).
+    #[test]
+    fn contact_pairs_bound_the_time_step_by_their_closing_speed() {
+        let deck = r#"
+[simulation]
+name = "closing"
+dimension = 2
+end_time = 1.0
+[materials.al]
+density = 2700.0
+eos = { type = "linear" }
+strength = { type = "elastic", youngs_modulus = 68.9e9, poissons_ratio = 0.33 }
+[[body]]
+name = "a"
+material = "al"
+spacing = 1.0e-3
+velocity = [500.0, 0.0]
+shape = { type = "rectangle", min = [0.0, 0.0], max = [1.0e-3, 1.0e-3] }
+[[body]]
+name = "b"
+material = "al"
+spacing = 1.0e-3
+velocity = [-500.0, 0.0]
+shape = { type = "rectangle", min = [1.5e-3, 0.0], max = [2.5e-3, 1.0e-3] }
+[[interaction]]
+bodies = ["a", "b"]
+type = "contact"
+stiffness = 1.0
+"#;
+        let case = crate::deck::parse(deck, "closing.toml").unwrap();
+        let (p, model) = crate::setup::build::<2>(&case).unwrap();
+        assert_eq!(p.n_real, 2);
+        let mut nl = NeighborList::default();
+        nl.build(&p.x, &p.h, p.n_real, 0.0);
+        let mut rates = Rates::default();
+        compute_rates(CubicSpline, &p, &nl, &model, &mut rates);
+        let c = p.c[0];
+        let expect = model.cfl * p.h[0] / (c + 1000.0 + 0.6 * model.alpha * c);
+        assert!(rates.particles[0].neighbors == 1);
+        assert!(
+            (rates.particles[0].dt / expect - 1.0).abs() < 1e-12,
+            "{} vs {expect}",
+            rates.particles[0].dt
+        );
     }
 }
