@@ -155,8 +155,8 @@ struct Gather<const D: usize> {
     vol: f64,
     rho: f64,
     c: f64,
-    /// σ/ρ², row by row.
-    sr2: [[f64; D]; D],
+    /// σ/ρ², its symmetric components in [`SYM`] order (6 loads a neighbour instead of 9).
+    sr2: [f64; 6],
 }
 
 impl<const D: usize> Gather<D> {
@@ -176,8 +176,22 @@ impl<const D: usize> Gather<D> {
             vol: 0.0,
             rho: 1.0,
             c: 0.0,
-            sr2: [[0.0; D]; D],
+            sr2: [0.0; 6],
         }
+    }
+}
+
+/// The components of a symmetric tensor kept in [`Gather::sr2`]: the diagonal, then xy, xz, yz
+/// (2D uses xx, yy, xy).
+const SYM: [(usize, usize); 6] = [(0, 0), (1, 1), (2, 2), (0, 1), (0, 2), (1, 2)];
+
+/// Where component (a, b) of a symmetric tensor sits in [`SYM`].
+#[inline(always)]
+const fn sym(a: usize, b: usize) -> usize {
+    if a == b {
+        a
+    } else {
+        a + b + 2
     }
 }
 
@@ -235,7 +249,14 @@ fn compute_rates_on<const D: usize, K: Kernel>(
             vol: p.m[i] / p.rho[i],
             rho: p.rho[i],
             c: p.c[i],
-            sr2: std::array::from_fn(|a| std::array::from_fn(|b| sr2[(a, b)])),
+            sr2: std::array::from_fn(|k| {
+                let (a, b) = SYM[k];
+                if a < D && b < D {
+                    sr2[(a, b)]
+                } else {
+                    0.0
+                }
+            }),
         }
     }));
     out.gather.push(Gather::padding());
@@ -499,7 +520,7 @@ fn conserve_chunk<const D: usize, K: Kernel, const ART: bool>(
         let mut tg: [f64; D] = std::array::from_fn(|a| {
             let mut t = -pi * grad[a];
             for (b, gb) in grad.iter().enumerate() {
-                t += (gi.sr2[a][b] + gj.sr2[a][b]) * gb;
+                t += (gi.sr2[sym(a, b)] + gj.sr2[sym(a, b)]) * gb;
             }
             t
         });
