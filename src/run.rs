@@ -303,6 +303,8 @@ fn run_dim<const D: usize>(case: &Case, opts: &RunOptions) -> Result<Summary> {
         particle_steps_per_second: n as f64 * steps as f64 / wall.max(1e-12),
         interactions_per_second: tally.interactions as f64 / wall.max(1e-12),
         mean_neighbors: tally.interactions as f64 / (n as f64 * steps.max(1) as f64),
+        searches: run.sim.state.searches,
+        partial_searches: run.sim.state.partial_searches,
         end_time: run.sim.state.time,
         energy_error: tally.energy_dev / tally.energy_scale.max(f64::MIN_POSITIVE),
         initial_energy: tally.e0.unwrap_or(0.0),

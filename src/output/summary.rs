@@ -18,6 +18,9 @@ pub struct Summary {
     /// Particle-neighbour interactions per second (each particle's neighbours once per step).
     pub interactions_per_second: f64,
     pub mean_neighbors: f64,
+    /// Full neighbour searches, and steps with a partial rebuild (see `neighbors`).
+    pub searches: u64,
+    pub partial_searches: u64,
     /// Simulated time reached (s).
     pub end_time: f64,
     /// Largest |E(t) − E(0)| over the run divided by the largest energy in play,
