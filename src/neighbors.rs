@@ -84,7 +84,6 @@ pub struct NeighborList {
     /// build (see [`NeighborList::refresh`]).
     dirty_block: Vec<bool>,
     dirty: Vec<bool>,
-    any_dirty: bool,
     /// Dirty particles now, and lists rebuilt by partial rebuilds since the full build.
     dirty_count: usize,
     rebuilt: usize,
@@ -182,7 +181,7 @@ impl NeighborList {
                 |a, b| (a.0.max(b.0), a.1.max(b.1), a.2.max(b.2)),
             );
         let (d_max, grow) = (d2.sqrt(), 2.0 * dh.max(0.0));
-        if 2.0 * d_max + grow < self.skin && !self.any_dirty {
+        if 2.0 * d_max + grow < self.skin && self.dirty_count == 0 {
             return Refresh::Valid;
         }
         if self.block_start.is_empty() || 2.0 * h_max + 2.0 * d_max > self.block_width {
@@ -247,7 +246,6 @@ impl NeighborList {
                 if i < n_real && !self.dirty[i] {
                     self.dirty[i] = true;
                     self.dirty_count += 1;
-                    self.any_dirty = true;
                 }
             }
         }
@@ -262,7 +260,7 @@ impl NeighborList {
     /// Rebuild the lists of the dirty particles from the current positions, with no skin
     /// (they are rebuilt again at the next step).
     pub fn rebuild_dirty<const D: usize>(&mut self, x: &[Vector<D>], h: &[f64]) {
-        if !self.any_dirty {
+        if self.dirty_count == 0 {
             return;
         }
         self.rebuilt += self.dirty_count;
@@ -284,7 +282,6 @@ impl NeighborList {
         self.lists.truncate(n_real);
         self.dirty.clear();
         self.dirty.resize(n_real, false);
-        self.any_dirty = false;
         self.dirty_count = 0;
         self.rebuilt = 0;
         self.block_start.clear();
@@ -312,22 +309,14 @@ impl NeighborList {
         };
         self.block_dims = dims;
         self.block_width = BLOCK_CELLS as f64 * grid.cell;
-        self.block_start.clear();
-        self.block_start.resize(count + 1, 0);
-        for c in &self.coords {
-            self.block_start[block(c) + 1] += 1;
-        }
-        for b in 0..count {
-            self.block_start[b + 1] += self.block_start[b];
-        }
-        self.block_members.resize(self.coords.len(), 0);
-        self.fill.clear();
-        self.fill.extend_from_slice(&self.block_start[..count]);
-        for (i, c) in self.coords.iter().enumerate() {
-            let slot = &mut self.fill[block(c)];
-            self.block_members[*slot as usize] = i as u32;
-            *slot += 1;
-        }
+        counting_sort(
+            &self.coords,
+            block,
+            count,
+            &mut self.block_start,
+            &mut self.block_members,
+            &mut self.fill,
+        );
         self.block_box.resize(count, [[0.0; 3]; 2]);
         self.dirty_block.clear();
         self.dirty_block.resize(count, false);
@@ -454,23 +443,14 @@ impl NeighborList {
         self.cell_start.clear();
         self.cell_key.clear();
         if dense {
-            // Counting sort by cell: O(N), stable (index order within a cell).
-            let cells = total as usize;
-            self.cell_start.resize(cells + 1, 0);
-            for c in &self.coords {
-                self.cell_start[grid.index(*c) + 1] += 1;
-            }
-            for k in 0..cells {
-                self.cell_start[k + 1] += self.cell_start[k];
-            }
-            self.sorted.resize(n, 0);
-            self.fill.clear();
-            self.fill.extend_from_slice(&self.cell_start[..cells]);
-            for (i, c) in self.coords.iter().enumerate() {
-                let slot = &mut self.fill[grid.index(*c)];
-                self.sorted[*slot as usize] = i as u32;
-                *slot += 1;
-            }
+            counting_sort(
+                &self.coords,
+                |c| grid.index(*c),
+                total as usize,
+                &mut self.cell_start,
+                &mut self.sorted,
+                &mut self.fill,
+            );
         } else {
             self.keyed.clear();
             let coords = &self.coords;
@@ -490,6 +470,35 @@ impl NeighborList {
             self.cell_start.push(n as u32);
         }
         grid
+    }
+}
+
+/// Counting sort of the items by `key` (< `count`): O(N), stable (index order within a key).
+/// `start[k]..start[k + 1]` are the positions in `sorted` of the items with key k; `fill` is
+/// a work buffer.
+fn counting_sort<T>(
+    items: &[T],
+    key: impl Fn(&T) -> usize,
+    count: usize,
+    start: &mut Vec<u32>,
+    sorted: &mut Vec<u32>,
+    fill: &mut Vec<u32>,
+) {
+    start.clear();
+    start.resize(count + 1, 0);
+    for item in items {
+        start[key(item) + 1] += 1;
+    }
+    for k in 0..count {
+        start[k + 1] += start[k];
+    }
+    sorted.resize(items.len(), 0);
+    fill.clear();
+    fill.extend_from_slice(&start[..count]);
+    for (i, item) in items.iter().enumerate() {
+        let slot = &mut fill[key(item)];
+        sorted[*slot as usize] = i as u32;
+        *slot += 1;
     }
 }
 
