@@ -215,3 +215,63 @@ pub struct PictureSpec {
     pub thickness: Option<f64>,
     pub color_by: ColorBy,
 }
+
+impl Case {
+    /// The physical set-up as (key, value) lines: everything that shapes the particles and the
+    /// equations — dimension, kernel, numerics, materials, bodies, interactions, symmetry — and
+    /// nothing a run may change on resuming (end time, step cap, outputs). A checkpoint keeps
+    /// it, so that resuming with a changed deck names what changed. Values print floats in
+    /// their shortest exact form, so any change shows.
+    pub fn physics_fingerprint(&self) -> Vec<(String, String)> {
+        let s = &self.simulation;
+        let mut out = vec![
+            (
+                "simulation.dimension".to_string(),
+                self.dimension.to_string(),
+            ),
+            ("simulation.kernel".into(), format!("{:?}", s.kernel)),
+            ("simulation.cfl".into(), format!("{:?}", s.cfl)),
+            (
+                "simulation.smoothing_ratio".into(),
+                format!("{:?}", s.smoothing_ratio),
+            ),
+            (
+                "simulation.viscosity".into(),
+                format!("alpha {:?}, beta {:?}", s.viscosity_alpha, s.viscosity_beta),
+            ),
+            ("simulation.gravity".into(), format!("{:?}", s.gravity)),
+            (
+                "simulation.smoothing_bounds".into(),
+                format!("{:?}", [s.h_min_ratio, s.h_max_ratio]),
+            ),
+            (
+                "simulation.impact_speed".into(),
+                format!("{:?}", s.impact_speed),
+            ),
+        ];
+        for m in &self.materials {
+            out.push((
+                format!("materials.{}", m.name),
+                format!(
+                    "density {:?}, eos {:?}, strength {:?}, pressure_cutoff {:?}, artificial_stress {:?}",
+                    m.density, m.eos, m.strength, m.pressure_cutoff, m.artificial_stress
+                ),
+            ));
+        }
+        for b in &self.bodies {
+            out.push((
+                format!("body '{}'", b.name),
+                format!(
+                    "material {}, spacing {:?}, velocity {:?}, motion {:?}, shape {:?}",
+                    self.materials[b.material].name, b.spacing, b.velocity, b.motion, b.shape
+                ),
+            ));
+        }
+        for i in &self.interactions {
+            let [a, b] = i.bodies.map(|k| self.bodies[k].name.as_str());
+            out.push((format!("interaction {a}–{b}"), format!("{:?}", i.kind)));
+        }
+        out.push(("symmetry".into(), format!("{:?}", self.symmetry)));
+        out
+    }
+}

@@ -1,7 +1,16 @@
 //! `strike check`: what a deck will do, before running it — and the closing text of a run.
+//!
+//! Everything is first estimated from the deck alone, before anything is allocated: particles
+//! per body (shape volume / spacing^D), memory, the first time step (from the materials' sound
+//! speeds and the bodies' speeds), steps, run time, snapshots and their disk volume. A case of
+//! at most [`SET_UP_LIMIT`] particles is then set up and takes one step, for exact counts and
+//! the exact first step; a larger one is described by the estimates alone, so that checking
+//! ten million particles takes no longer than checking ten thousand.
 
-use crate::case::Case;
+use crate::case::{Case, Motion};
+use crate::deck::estimate_particles;
 use crate::error::{Error, Result};
+use crate::material::Material;
 use crate::output::summary::Summary;
 use crate::particles::estimated_bytes_per_particle;
 use crate::physics::PairRule;
@@ -12,12 +21,196 @@ use std::fmt::Write;
 /// figure below what `strike bench` measures on one core of the 2-core reference machine.
 pub const PLANNING_PARTICLE_STEPS_PER_CORE: f64 = 5.0e5;
 
-/// Validate a case fully (set it up and take one step) and describe it.
+/// `check` sets a case up (and takes one step) only up to this many estimated particles.
+pub const SET_UP_LIMIT: f64 = 1.0e6;
+
+/// A run longer than this (s) gets a warning.
+const LONG_RUN: f64 = 86_400.0;
+
+/// Snapshots a run will write and what they take on disk.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct OutputPlan {
+    /// Snapshots, the first and the last included.
+    pub snapshots: u64,
+    /// Bytes of one snapshot (.vtp).
+    pub snapshot_bytes: f64,
+    /// Bytes of the checkpoint (rewritten with every snapshot).
+    pub checkpoint_bytes: f64,
+    /// All snapshots plus the checkpoint twice (the new one is written beside the old).
+    pub total_bytes: f64,
+}
+
+/// The snapshots of a case of `n` particles: one per interval (at most one per step, so the
+/// count is an upper bound), plus the first and the last.
+pub fn output_plan(case: &Case, n: usize) -> OutputPlan {
+    let end = case.simulation.end_time;
+    let by_interval = case
+        .output
+        .snapshot_interval
+        .map_or(0.0, |i| (end / i).floor());
+    let snapshots = (by_interval + 2.0).min(u64::MAX as f64) as u64;
+    let snapshot_bytes = crate::output::vtk::snapshot_bytes(n) as f64;
+    let checkpoint_bytes = n as f64 * if case.dimension == 2 { 200.0 } else { 320.0 };
+    OutputPlan {
+        snapshots,
+        snapshot_bytes,
+        checkpoint_bytes,
+        total_bytes: snapshots as f64 * snapshot_bytes + 2.0 * checkpoint_bytes,
+    }
+}
+
+/// The first time step estimated from the deck: C h0 / (c (1 + 0.6 α) + v) for each body, with
+/// c its material's reference sound speed and v the largest speed relative to another body
+/// (the bodies meet at it). Returns the step and the body that sets it.
+pub fn estimated_first_step(case: &Case) -> (f64, usize) {
+    let s = &case.simulation;
+    let mats: Vec<Material> = case.materials.iter().map(Material::from_spec).collect();
+    let speed =
+        |a: &[f64; 3], b: &[f64; 3]| (0..3).map(|k| (a[k] - b[k]).powi(2)).sum::<f64>().sqrt();
+    case.bodies
+        .iter()
+        .enumerate()
+        .map(|(i, b)| {
+            let c = mats[b.material].sound_speed0();
+            let v = case
+                .bodies
+                .iter()
+                .map(|o| speed(&b.velocity, &o.velocity))
+                .fold(0.0, f64::max);
+            let h = s.smoothing_ratio * b.spacing;
+            (s.cfl * h / (c * (1.0 + 0.6 * s.viscosity_alpha) + v), i)
+        })
+        .fold((f64::INFINITY, 0), |a, b| if b.0 < a.0 { b } else { a })
+}
+
+/// Validate a case and describe it (see the module doc).
 pub fn check(case: &Case) -> Result<String> {
+    let estimated: Vec<f64> = case
+        .bodies
+        .iter()
+        .map(|b| estimate_particles(&b.shape, b.spacing, case.dimension))
+        .collect();
+    let total: f64 = estimated.iter().sum();
+    let (dt, body) = estimated_first_step(case);
+    if !(dt.is_finite() && dt > 0.0) {
+        let b = &case.bodies[body];
+        let speed = b.velocity.iter().map(|v| v * v).sum::<f64>().sqrt();
+        return Err(Error::Invalid(format!(
+            "the first time step would be {dt:e} s, so the run could not advance: body '{}' (spacing {:e} m, speed {speed:e} m/s) sets it; check its velocity, spacing and material",
+            b.name, b.spacing
+        )));
+    }
+    if total > SET_UP_LIMIT {
+        return Ok(describe_estimated(case, &estimated, dt));
+    }
     match case.dimension {
         2 => check_dim::<2>(case),
         3 => check_dim::<3>(case),
         d => Err(Error::Invalid(format!("dimension {d} is not 2 or 3"))),
+    }
+}
+
+/// The lines every check prints after the bodies: steps, memory, run time, outputs, warnings.
+fn plan_lines(case: &Case, n: f64, dt: f64, w: &mut String, warnings: &mut Vec<String>) {
+    let steps = (case.simulation.end_time / dt).ceil();
+    let bytes = n * estimated_bytes_per_particle(case.dimension) as f64;
+    let cores = crate::machine::cores() as f64;
+    let seconds = steps * n / (PLANNING_PARTICLE_STEPS_PER_CORE * cores);
+    let _ = writeln!(
+        w,
+        "first time step: {dt:.4e} s  → about {steps:.0} steps to {:.4e} s (contact may shorten it)",
+        case.simulation.end_time
+    );
+    let _ = writeln!(w, "estimated memory: {}", human_bytes(bytes));
+    let _ = writeln!(
+        w,
+        "estimated run time: {} on {} cores (planning figure {:.0e} particle-steps/s per core)",
+        human_seconds(seconds),
+        cores,
+        PLANNING_PARTICLE_STEPS_PER_CORE
+    );
+    if seconds > LONG_RUN {
+        warnings.push(format!(
+            "the run would take about {} on this machine ({:.0} steps of {n:.3e} particles): coarsen the spacing, shorten end_time, or run on more cores",
+            human_seconds(seconds),
+            steps
+        ));
+    }
+    let plan = output_plan(case, n as usize);
+    let shown = plan.snapshots.min(steps as u64 + 1);
+    let _ = writeln!(
+        w,
+        "snapshots: {shown} of about {} each, {} in all with the checkpoint ({})",
+        human_bytes(plan.snapshot_bytes),
+        human_bytes(shown as f64 * plan.snapshot_bytes + 2.0 * plan.checkpoint_bytes),
+        match case.output.snapshot_interval {
+            Some(i) => format!("every {i:e} s"),
+            None => "first and last only".into(),
+        }
+    );
+    if let Some(i) = case.output.snapshot_interval {
+        if i < dt && plan.snapshots > steps as u64 + 1 {
+            warnings.push(format!(
+                "snapshot_interval {i:e} s is shorter than the time step ({dt:.3e} s): one snapshot per step will be written, about {shown}"
+            ));
+        }
+    } else {
+        warnings.push(
+            "no [output] snapshot_interval: only the first and last snapshots are written".into(),
+        );
+    }
+}
+
+/// A case too large to set up for a check, from the deck's figures alone.
+fn describe_estimated(case: &Case, estimated: &[f64], dt: f64) -> String {
+    let mut s = String::new();
+    let w = &mut s;
+    let total: f64 = estimated.iter().sum();
+    header(case, w);
+    let _ = writeln!(
+        w,
+        "bodies (estimated: the case is too large for check to set up; `run` does):"
+    );
+    for (body, count) in case.bodies.iter().zip(estimated) {
+        let _ = writeln!(
+            w,
+            "  {:<16} ~{:>9.3e} particles  spacing {:.4e} m  h0 {:.4e} m  material {}",
+            body.name,
+            count,
+            body.spacing,
+            body.spacing * case.simulation.smoothing_ratio,
+            case.materials[body.material].name
+        );
+    }
+    let _ = writeln!(w, "particles: ~{total:.3e}");
+    let mut warnings = Vec::new();
+    plan_lines(case, total, dt, w, &mut warnings);
+    warning_lines(w, warnings);
+    s
+}
+
+fn header(case: &Case, w: &mut String) {
+    let _ = writeln!(
+        w,
+        "case '{}' ({}, {}D{})",
+        case.name,
+        case.file,
+        case.dimension,
+        if case.dimension == 2 {
+            ", plane strain"
+        } else {
+            ""
+        }
+    );
+}
+
+fn warning_lines(w: &mut String, warnings: Vec<String>) {
+    if warnings.is_empty() {
+        let _ = writeln!(w, "no warnings");
+    } else {
+        for wn in warnings {
+            let _ = writeln!(w, "warning: {wn}");
+        }
     }
 }
 
@@ -27,14 +220,7 @@ fn check_dim<const D: usize>(case: &Case) -> Result<String> {
     let n = p.n_real;
     let mut s = String::new();
     let w = &mut s;
-    let _ = writeln!(
-        w,
-        "case '{}' ({}, {}D{})",
-        case.name,
-        case.file,
-        D,
-        if D == 2 { ", plane strain" } else { "" }
-    );
+    header(case, w);
     let _ = writeln!(w, "bodies:");
     let mut warnings = Vec::new();
     for (b, body) in case.bodies.iter().enumerate() {
@@ -51,7 +237,7 @@ fn check_dim<const D: usize>(case: &Case) -> Result<String> {
             mat.rho0,
             mat.sound_speed0(),
             body.velocity.iter().map(|v| v * v).sum::<f64>().sqrt(),
-            if body.motion == crate::case::Motion::Prescribed { "  (prescribed motion)" } else { "" }
+            if body.motion == Motion::Prescribed { "  (prescribed motion)" } else { "" }
         );
     }
     let nb = case.bodies.len();
@@ -102,56 +288,38 @@ fn check_dim<const D: usize>(case: &Case) -> Result<String> {
             ));
         }
     }
-    if case.output.snapshot_interval.is_none() {
-        warnings.push(
-            "no [output] snapshot_interval: only the first and last snapshots are written".into(),
-        );
-    }
-    let d = sim.step(f64::INFINITY)?;
-    let steps = (case.simulation.end_time / d.dt).ceil();
-    let bytes = n as f64 * estimated_bytes_per_particle(D) as f64;
-    let cores = std::thread::available_parallelism().map_or(1, |c| c.get()) as f64;
-    let seconds = steps * n as f64 / (PLANNING_PARTICLE_STEPS_PER_CORE * cores);
+    let d = match sim.step(f64::INFINITY) {
+        Ok(d) => d,
+        Err(Error::Unstable { cause, .. }) => {
+            return Err(Error::Invalid(format!(
+                "the case cannot start: its first step fails: {cause}"
+            )))
+        }
+        Err(e) => return Err(e),
+    };
     let _ = writeln!(
         w,
         "particles: {n}   mean neighbours: {:.1}",
         d.interactions as f64 / n as f64
     );
-    let _ = writeln!(
-        w,
-        "first time step: {:.4e} s  → about {:.0} steps to {:.4e} s (contact may shorten it)",
-        d.dt, steps, case.simulation.end_time
-    );
-    let _ = writeln!(w, "estimated memory: {:.1} MB", bytes / 1e6);
-    let _ = writeln!(
-        w,
-        "estimated run time: {} on {} cores (planning figure {:.0e} particle-steps/s per core)",
-        human_seconds(seconds),
-        cores,
-        PLANNING_PARTICLE_STEPS_PER_CORE
-    );
+    plan_lines(case, n as f64, d.dt, w, &mut warnings);
     if let Some(g) = d.min_interbody_distance {
         let _ = writeln!(
             w,
             "bodies start within contact range: closest pair at {g:.3} Δp_avg"
         );
     }
-    if warnings.is_empty() {
-        let _ = writeln!(w, "no warnings");
-    } else {
-        for wn in warnings {
-            let _ = writeln!(w, "warning: {wn}");
-        }
-    }
+    warning_lines(w, warnings);
     Ok(s)
 }
 
 /// The closing text of a run.
 pub fn summary_text(s: &Summary) -> String {
     format!(
-        "{}: {} particles, {} steps to t = {:.4e} s in {} ({:.3e} particle-steps/s, {:.3e} interactions/s, {} threads)\n\
+        "{} ({}): {} particles, {} steps to t = {:.4e} s in {} ({:.3e} particle-steps/s, {:.3e} interactions/s, {} threads)\n\
          energy error {:.3e}, momentum error {:.3e}, min inter-body distance {}",
         s.status,
+        s.reason,
         s.particles,
         s.steps,
         s.end_time,
@@ -165,12 +333,27 @@ pub fn summary_text(s: &Summary) -> String {
     )
 }
 
-fn human_seconds(s: f64) -> String {
+/// Seconds in the largest unit that keeps them readable.
+pub fn human_seconds(s: f64) -> String {
     if s < 120.0 {
         format!("{s:.1} s")
     } else if s < 7200.0 {
         format!("{:.1} min", s / 60.0)
-    } else {
+    } else if s < 3.0 * 86_400.0 {
         format!("{:.1} h", s / 3600.0)
+    } else {
+        format!("{:.1} days", s / 86_400.0)
     }
+}
+
+/// A byte count in decimal units (kB, MB, GB, TB).
+pub fn human_bytes(b: f64) -> String {
+    const UNITS: [&str; 6] = ["B", "kB", "MB", "GB", "TB", "PB"];
+    let mut v = b;
+    let mut unit = 0;
+    while v >= 1000.0 && unit + 1 < UNITS.len() {
+        v /= 1000.0;
+        unit += 1;
+    }
+    format!("{v:.1} {}", UNITS[unit])
 }

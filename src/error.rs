@@ -36,6 +36,10 @@ pub enum Error {
     /// The run went unstable.
     #[error("run stopped at step {step}, t = {time:.6e} s: {cause}")]
     Unstable { step: u64, time: f64, cause: String },
+    /// The run was stopped by a signal (SIGINT, SIGTERM) after finishing a step; a checkpoint
+    /// of that step was written.
+    #[error("interrupted at step {step}, t = {time:.6e} s: a checkpoint was written; resume with --resume <out>/checkpoint.bin")]
+    Interrupted { step: u64, time: f64 },
     /// Anything else that is the user's to fix (bad command-line value, …).
     #[error("{0}")]
     Invalid(String),

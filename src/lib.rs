@@ -18,6 +18,7 @@ pub mod deck;
 pub mod error;
 pub mod integrate;
 pub mod kernel;
+pub mod machine;
 pub mod material;
 pub mod neighbors;
 pub mod output;

@@ -4,6 +4,8 @@ use clap::{Parser, Subcommand};
 use miette::{miette, LabeledSpan, NamedSource, Report};
 use std::io::IsTerminal;
 use std::path::{Path, PathBuf};
+use std::sync::atomic::{AtomicBool, Ordering};
+use std::sync::Arc;
 use strike::{case::Case, check, deck, run, Error};
 
 #[derive(Parser)]
@@ -37,6 +39,11 @@ enum Command {
         /// in the output directory.
         #[arg(long)]
         resume: Option<PathBuf>,
+        /// Replace an earlier run's files in the output directory (its snapshots, history,
+        /// pictures, summary and checkpoint; nothing else). Without it such a directory is
+        /// refused.
+        #[arg(long)]
+        overwrite: bool,
     },
     /// Benchmark built-in cases (1 thread and all cores) and write bench.json.
     Bench {
@@ -66,26 +73,58 @@ macro_rules! say {
     }};
 }
 
+/// Exit status of a run stopped by SIGINT or SIGTERM (after its checkpoint): 128 + SIGINT,
+/// the shell's convention.
+const EXIT_INTERRUPTED: u8 = 130;
+
 fn main() -> std::process::ExitCode {
+    // Colour only on a terminal (and never with NO_COLOR set): logs and files get plain text.
+    let colour = std::io::stderr().is_terminal()
+        && std::env::var_os("NO_COLOR").is_none_or(|v| v.is_empty());
     tracing_subscriber::fmt()
         .with_env_filter(
             tracing_subscriber::EnvFilter::try_from_default_env()
                 .unwrap_or_else(|_| tracing_subscriber::EnvFilter::new("info")),
         )
         .with_writer(std::io::stderr)
+        .with_ansi(colour)
         .with_target(false)
         .init();
+    let _ = miette::set_hook(Box::new(move |_| {
+        Box::new(miette::MietteHandlerOpts::new().color(colour).build())
+    }));
     match main_inner() {
         Ok(()) => std::process::ExitCode::SUCCESS,
-        Err(report) => {
+        Err((report, interrupted)) => {
             eprintln!("{report:?}");
-            std::process::ExitCode::FAILURE
+            if interrupted {
+                std::process::ExitCode::from(EXIT_INTERRUPTED)
+            } else {
+                std::process::ExitCode::FAILURE
+            }
         }
     }
 }
 
-fn main_inner() -> Result<(), Report> {
+/// A flag raised by the first SIGINT or SIGTERM (the run then ends after its current step with
+/// a checkpoint); a second one ends the process at once.
+fn stop_flag() -> Result<Arc<AtomicBool>, Report> {
+    let flag = Arc::new(AtomicBool::new(false));
+    let raised = flag.clone();
+    ctrlc::set_handler(move || {
+        if raised.swap(true, Ordering::SeqCst) {
+            std::process::exit(EXIT_INTERRUPTED.into());
+        }
+        eprintln!("strike: stopping after this step (a checkpoint is written); signal again to quit at once");
+    })
+    .map_err(|e| miette!("cannot install the SIGINT/SIGTERM handler: {e}"))?;
+    Ok(flag)
+}
+
+/// The command's work; an error comes with whether the run was interrupted.
+fn main_inner() -> Result<(), (Report, bool)> {
     let cli = Cli::parse();
+    let plain = |r: Report| (r, false);
     match cli.command {
         Command::Run {
             case,
@@ -93,9 +132,10 @@ fn main_inner() -> Result<(), Report> {
             threads,
             max_steps,
             resume,
+            overwrite,
         } => {
-            set_threads(threads)?;
-            let c = load(&case)?;
+            set_threads(threads).map_err(plain)?;
+            let c = load(&case).map_err(plain)?;
             // A resumed run continues in its checkpoint's directory unless told otherwise.
             let out_dir = out.unwrap_or_else(|| match resume.as_deref().and_then(Path::parent) {
                 Some(dir) if !dir.as_os_str().is_empty() => dir.to_path_buf(),
@@ -114,8 +154,13 @@ fn main_inner() -> Result<(), Report> {
                 max_steps,
                 write_fields: true,
                 resume,
+                overwrite,
+                stop: Some(stop_flag().map_err(plain)?),
             };
-            let summary = run::run(&c, &opts).map_err(|e| report(e, &case))?;
+            let summary = run::run(&c, &opts).map_err(|e| {
+                let interrupted = matches!(e, Error::Interrupted { .. });
+                (report(e, &case), interrupted)
+            })?;
             say!("{}", check::summary_text(&summary));
             say!("output in {}", out_dir.display());
             Ok(())
@@ -123,16 +168,16 @@ fn main_inner() -> Result<(), Report> {
         Command::Bench { quick, json, cases } => {
             let report =
                 strike::bench::run_all(quick, &cases, |c| say!("{}", strike::bench::line(c)))
-                    .map_err(|e| miette!("{e}"))?;
-            let text = serde_json::to_string_pretty(&report).map_err(|e| miette!("{e}"))?;
-            std::fs::write(&json, text + "\n")
-                .map_err(|e| miette!("cannot write {}: {e}", json.display()))?;
+                    .map_err(|e| plain(miette!("{e}")))?;
+            let text = serde_json::to_string_pretty(&report).map_err(|e| plain(miette!("{e}")))?;
+            strike::output::atomic::write(&json, (text + "\n").as_bytes())
+                .map_err(|e| plain(miette!("cannot write {}: {e}", json.display())))?;
             say!("written to {}", json.display());
             Ok(())
         }
         Command::Check { case } => {
-            let c = load(&case)?;
-            let text = check::check(&c).map_err(|e| report(e, &case))?;
+            let c = load(&case).map_err(plain)?;
+            let text = check::check(&c).map_err(|e| plain(report(e, &case)))?;
             say!("{text}");
             Ok(())
         }

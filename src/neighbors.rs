@@ -10,7 +10,15 @@
 //! dense and built by counting sort in O(N); when debris has spread the box, only occupied cells
 //! are kept, sorted by key, and a run is found by binary search. Either way the lists hold, for
 //! each real particle i, every particle j ≠ i (real or ghost) with r_ij < h_i + h_j (= 2 h_ij,
-//! the support of W(r, h_ij)), in a fixed order, so results do not depend on the thread count.
+//! the support of W(r, h_ij)).
+//!
+//! **Canonical order.** Each list is sorted by particle index. The sums over a particle's
+//! neighbours then add the same numbers in the same order whenever and however the list was
+//! built (a full build, a partial rebuild, a build after a resume, with or without the skin's
+//! extra entries, which the users drop): a run's results do not depend on its search history,
+//! so a checkpoint taken at any step resumes bit for bit, and they do not depend on the thread
+//! count. Ghosts are numbered plane by plane in the order of their sources (see `boundary`),
+//! so two ghost sets of different reach order their common ghosts alike.
 //!
 //! The one list serves both the conservation equations and the contact: each pair is classified
 //! by its bodies when it is used (see `physics::PairTable`), so there is no second search.
@@ -145,9 +153,16 @@ impl NeighborList {
         self.lists.iter().map(Vec::len).sum()
     }
 
-    /// Particle indices (real and ghost) in cell order from the last build: a locality-friendly
-    /// order for the particle store.
-    pub fn cell_order(&self) -> &[u32] {
+    /// The particles at `x` (with smoothing lengths `h`) in cell order: a locality-friendly
+    /// order for the particle store, and a function of `x` and `h` alone (so that reordering
+    /// does not depend on when the lists were last built). Leaves the lists to be rebuilt.
+    pub fn cell_order<const D: usize>(&mut self, x: &[Vector<D>], h: &[f64]) -> &[u32] {
+        self.h_built.clear();
+        if x.is_empty() {
+            self.sorted.clear();
+        } else {
+            self.bin(x, h, 0.0);
+        }
         &self.sorted
     }
 
@@ -408,6 +423,8 @@ impl NeighborList {
                     }
                 }
             }
+            // Canonical order (see the module doc); cell runs are nearly sorted already.
+            list.sort_unstable();
         });
     }
 

@@ -2,9 +2,23 @@
 //! sees around it — snapshots (.vtp + .pvd), `history.csv`, cross-section pictures, the history
 //! plot, `summary.json`, `checkpoint.bin`, a progress bar or log lines. Output reads particles,
 //! never changes them.
+//!
+//! **Every exit writes `summary.json`** with the true status: `completed` (the end time was
+//! reached), `max_steps` (stopped by the step cap, as asked), `interrupted` (SIGINT or SIGTERM:
+//! the step in progress is finished and a checkpoint written), `unstable` (the last good state
+//! is kept as a snapshot and a checkpoint) or `failed` (an output could not be written, say on
+//! a full disk; the summary is then written if there is room for it). Every file is written
+//! atomically (see [`crate::output::atomic`]).
+//!
+//! **Output times never stall a run.** A snapshot or picture time is landed on exactly when
+//! that shortens the step by at most a factor 2; an output time closer than half a step is
+//! taken at the end of the step that passes it instead. At most one snapshot is written per
+//! step, and the next snapshot time is counted from the current time, never by adding up
+//! intervals (so an interval far below the time step cannot loop).
 
 use crate::case::{Case, ColorBy, PictureSpec};
 use crate::error::{Error, Result};
+use crate::output::atomic;
 use crate::output::checkpoint::{Checkpoint, RunState, Tally};
 use crate::output::history::{History, HistoryWriter};
 use crate::output::picture::{self, SectionFrame};
@@ -12,10 +26,12 @@ use crate::output::summary::Summary;
 use crate::output::vtk::{self, PvdWriter};
 use crate::simulation::{Diagnostics, Simulation};
 use std::path::{Path, PathBuf};
+use std::sync::atomic::{AtomicBool, Ordering};
+use std::sync::Arc;
 use std::time::Instant;
 
 /// How to run.
-#[derive(Debug, Clone)]
+#[derive(Debug, Clone, Default)]
 pub struct RunOptions {
     /// Output directory (created).
     pub out_dir: PathBuf,
@@ -27,11 +43,17 @@ pub struct RunOptions {
     pub write_fields: bool,
     /// Go on from this checkpoint (written by a run of the same case).
     pub resume: Option<PathBuf>,
+    /// Replace the files of an earlier run in `out_dir` (without it such a directory is
+    /// refused, unless resuming). Other files are never touched.
+    pub overwrite: bool,
+    /// Set from outside (on SIGINT or SIGTERM) to end the run after the step in progress, with
+    /// a checkpoint and the status `interrupted`.
+    pub stop: Option<Arc<AtomicBool>>,
 }
 
 /// Run a case; the summary is also written to `summary.json`. A run that goes unstable writes
 /// its last good snapshot, a checkpoint of it and a summary whose `status` gives the cause, then
-/// returns the error.
+/// returns the error; so does an interrupted one (a checkpoint of its last step).
 pub fn run(case: &Case, opts: &RunOptions) -> Result<Summary> {
     match case.dimension {
         2 => run_dim::<2>(case, opts),
@@ -77,6 +99,15 @@ impl Tally {
     }
 }
 
+/// How the time loop ended.
+enum Ending {
+    Completed,
+    MaxSteps(u64),
+    Interrupted,
+    Unstable(Error),
+    Failed(Error),
+}
+
 /// A run in progress: the simulation and its outputs.
 struct Run<'a, const D: usize> {
     case: &'a Case,
@@ -108,24 +139,25 @@ impl<const D: usize> Run<'_, D> {
     }
 
     fn checkpoint(&mut self) -> Result<()> {
-        let (particles, sim) = self.sim.checkpoint_state();
+        let (particles, sim, searches) = self.sim.checkpoint_state();
         let mut run = self.state.clone();
         run.snapshots = self.pvd.entries().to_vec();
         run.history_len = self.history.len();
         run.wall_seconds += self.start.elapsed().as_secs_f64();
         let c = Checkpoint::<D> {
-            format: crate::output::checkpoint::FORMAT,
             case: self.case.name.clone(),
+            physics: self.case.physics_fingerprint(),
             particles,
             sim,
+            searches,
             run,
         };
         c.write(&self.out("checkpoint.bin"))
     }
 
-    /// Cross sections due at the current time.
+    /// Cross sections due at the current time (taken at the first step at or past their time).
     fn take_pictures(&mut self) {
-        let tol = 1e-9 * self.case.simulation.end_time;
+        let tol = time_tolerance(self.case);
         while let Some(&(k, t)) = self.state.pending_pictures.first() {
             if t > self.sim.state.time + tol {
                 break;
@@ -141,6 +173,207 @@ impl<const D: usize> Run<'_, D> {
             self.state.pending_pictures.remove(0);
         }
     }
+
+    /// The longest step allowed by the end time and the next output time (see the module
+    /// doc): the end time is always landed on, output times only where that costs at most
+    /// half a step.
+    fn step_limit(&self) -> f64 {
+        let (time, dt_prev) = (self.sim.state.time, self.sim.state.dt_prev);
+        let mut next_output = self.state.next_snapshot;
+        if let Some(&(_, t)) = self.state.pending_pictures.first() {
+            next_output = next_output.min(t);
+        }
+        let end = self.case.simulation.end_time;
+        land(end - time, dt_prev, true).min(land(next_output - time, dt_prev, false))
+    }
+
+    /// Steps until the end time, the step cap, a stop request or a failure.
+    fn time_loop(&mut self, max_steps: Option<u64>) -> Ending {
+        let n = self.sim.particles.n_real;
+        let end = self.case.simulation.end_time;
+        let tol = time_tolerance(self.case);
+        let interval = self.case.output.snapshot_interval;
+        let bar = self.opts.progress.then(|| progress_bar(end));
+        let first_step = self.sim.state.step;
+        let mut last_log = Instant::now();
+        let ending = loop {
+            if self.sim.state.time >= end - tol {
+                break Ending::Completed;
+            }
+            if let Some(m) = max_steps.filter(|&m| self.sim.state.step >= m) {
+                break Ending::MaxSteps(m);
+            }
+            if self
+                .opts
+                .stop
+                .as_ref()
+                .is_some_and(|s| s.load(Ordering::Relaxed))
+            {
+                break Ending::Interrupted;
+            }
+            let d = match self.sim.step(self.step_limit()) {
+                Ok(d) => d,
+                Err(e) => break Ending::Unstable(e),
+            };
+            self.state.tally.add(&d);
+            if (self.sim.state.step - 1).is_multiple_of(self.case.output.history_every) {
+                if let Err(e) = self.history.row(&d) {
+                    break Ending::Failed(e);
+                }
+            }
+            if self.sim.state.time >= self.state.next_snapshot - tol {
+                self.state.next_snapshot = interval.map_or(f64::INFINITY, |i| {
+                    next_output_time(self.sim.state.time, i, tol)
+                });
+                if let Err(e) = self.snapshot() {
+                    break Ending::Failed(e);
+                }
+            }
+            self.take_pictures();
+            let wall = self.start.elapsed().as_secs_f64();
+            let rate = n as f64 * (self.sim.state.step - first_step) as f64 / wall.max(1e-9);
+            if let Some(bar) = &bar {
+                bar.set_position((self.sim.state.time / end * 1000.0) as u64);
+                bar.set_message(format!(
+                    "t = {:.4e} s, step {}, {:.3e} particle-steps/s",
+                    self.sim.state.time, self.sim.state.step, rate
+                ));
+            } else if last_log.elapsed().as_secs_f64() > 10.0 {
+                last_log = Instant::now();
+                tracing::info!(
+                    "t = {:.4e} s ({:.1} %), step {}, dt = {:.3e} s, {:.3e} particle-steps/s",
+                    self.sim.state.time,
+                    100.0 * self.sim.state.time / end,
+                    self.sim.state.step,
+                    d.dt,
+                    rate
+                );
+            }
+        };
+        if let Some(bar) = &bar {
+            bar.finish_and_clear();
+        }
+        ending
+    }
+
+    /// The closing outputs of a run that ended with `ending`: the last snapshot and checkpoint
+    /// (of the last good state when unstable), the closing history row, the pictures. Returns
+    /// the ending, turned into `Failed` if one of them cannot be written.
+    fn close(&mut self, ending: Ending) -> Ending {
+        if matches!(ending, Ending::Failed(_)) {
+            return ending;
+        }
+        let unstable = matches!(ending, Ending::Unstable(_));
+        // The checkpoint first, so that a resumed run drops the closing row.
+        let mut done = self.snapshot();
+        if !unstable {
+            let last = self.state.tally.last.clone();
+            done = done.and_then(|()| self.history.row(&last));
+        }
+        if self.opts.write_fields {
+            done = done.and_then(|()| {
+                write_pictures(
+                    self.case,
+                    &self.opts.out_dir,
+                    &self.sim.body_names,
+                    &self.state.frames,
+                )
+            });
+        }
+        match done {
+            Ok(()) => ending,
+            Err(e) => Ending::Failed(e),
+        }
+    }
+
+    fn summary(&self, status: &str, reason: String) -> Summary {
+        let n = self.sim.particles.n_real;
+        let wall = self.state.wall_seconds + self.start.elapsed().as_secs_f64();
+        let steps = self.sim.state.step;
+        let tally = &self.state.tally;
+        Summary {
+            case: self.case.name.clone(),
+            dimension: D,
+            particles: n,
+            threads: rayon::current_num_threads(),
+            steps,
+            wall_seconds: wall,
+            particle_steps_per_second: n as f64 * steps as f64 / wall.max(1e-12),
+            interactions_per_second: tally.interactions as f64 / wall.max(1e-12),
+            mean_neighbors: tally.interactions as f64 / (n as f64 * steps.max(1) as f64),
+            searches: self.sim.stats.searches,
+            partial_searches: self.sim.stats.partial_searches,
+            end_time: self.sim.state.time,
+            energy_error: tally.energy_dev / tally.energy_scale.max(f64::MIN_POSITIVE),
+            initial_energy: tally.e0.unwrap_or(0.0),
+            final_energy: tally.last.total,
+            momentum_error: tally.momentum_dev
+                / (0..3)
+                    .filter(|&k| tally.conserved[k])
+                    .map(|k| tally.p0[k] * tally.p0[k])
+                    .sum::<f64>()
+                    .sqrt()
+                    .max(tally.momentum_scale)
+                    .max(f64::MIN_POSITIVE),
+            min_interbody_distance: tally.min_gap,
+            modelled_part: modelled_part(self.case),
+            status: status.to_string(),
+            reason,
+        }
+    }
+}
+
+/// The step limit for an output `remaining` seconds ahead, after a step of `dt_prev` (0 before
+/// the first step). Approaching it, two steps share what is left when it is less than two
+/// steps away; one that is closer than half a step (outputs denser than the steps) is not
+/// landed on unless `must` (the end time).
+fn land(remaining: f64, dt_prev: f64, must: bool) -> f64 {
+    if must {
+        return if dt_prev > 0.0 && remaining > dt_prev && remaining < 2.0 * dt_prev {
+            0.5 * remaining
+        } else {
+            remaining
+        };
+    }
+    if dt_prev <= 0.0 || remaining < 0.5 * dt_prev {
+        f64::INFINITY
+    } else if remaining <= dt_prev {
+        remaining
+    } else if remaining < 2.0 * dt_prev {
+        0.5 * remaining
+    } else {
+        remaining
+    }
+}
+
+/// The first multiple of `interval` after `time` (by more than `tol`), counted from the time
+/// itself; never `time` or earlier, whatever the sizes.
+pub fn next_output_time(time: f64, interval: f64, tol: f64) -> f64 {
+    let k = ((time + tol) / interval).floor() + 1.0;
+    (k * interval).max(time.next_up())
+}
+
+/// Times closer than this are the same time (s).
+fn time_tolerance(case: &Case) -> f64 {
+    1e-9 * case.simulation.end_time
+}
+
+/// What `summary.json` says about the part of the bodies a run models.
+pub fn modelled_part(case: &Case) -> String {
+    if case.symmetry.is_empty() {
+        return "the whole bodies: masses, forces, momenta and energies are those of the bodies"
+            .into();
+    }
+    let planes: Vec<String> = case
+        .symmetry
+        .iter()
+        .map(|p| format!("{} = {}", ["x", "y", "z"][p.axis], p.position))
+        .collect();
+    format!(
+        "the part on one side of the symmetry planes {}: masses, forces, momenta and energies are those of the part modelled (for bodies cut in two by each plane, ×{} for the whole)",
+        planes.join(", "),
+        1u64 << case.symmetry.len().min(63)
+    )
 }
 
 fn section_thickness(case: &Case, spec: &PictureSpec) -> f64 {
@@ -152,23 +385,108 @@ fn section_thickness(case: &Case, spec: &PictureSpec) -> f64 {
     })
 }
 
-fn run_dim<const D: usize>(case: &Case, opts: &RunOptions) -> Result<Summary> {
+/// The files an earlier run of `case` leaves in `dir`: snapshots and their series, history,
+/// summary, checkpoint, pictures, and temporary files of an interrupted write.
+pub fn earlier_outputs(dir: &Path, case: &str) -> Vec<PathBuf> {
+    let Ok(entries) = std::fs::read_dir(dir) else {
+        return Vec::new();
+    };
+    let snapshot = |name: &str| {
+        name.strip_prefix(case)
+            .and_then(|r| r.strip_prefix('_'))
+            .and_then(|r| r.strip_suffix(".vtp"))
+            .is_some_and(|step| !step.is_empty() && step.bytes().all(|b| b.is_ascii_digit()))
+    };
+    let mut found: Vec<PathBuf> = entries
+        .filter_map(|e| e.ok())
+        .filter(|e| e.file_type().is_ok_and(|t| t.is_file()))
+        .filter_map(|e| {
+            let name = e.file_name().into_string().ok()?;
+            let own = matches!(
+                name.as_str(),
+                "summary.json" | "history.csv" | "history.png" | "checkpoint.bin"
+            ) || name == format!("{case}.pvd")
+                || snapshot(&name)
+                || (name.starts_with("section") && name.ends_with(".png"))
+                || atomic::is_temp_name(&name);
+            own.then(|| e.path())
+        })
+        .collect();
+    found.sort();
+    found
+}
+
+/// Make the output directory ready: created, and free of an earlier run's files (removed with
+/// `overwrite`, kept when resuming, refused otherwise).
+fn prepare_output(case: &Case, opts: &RunOptions) -> Result<()> {
     let out = &opts.out_dir;
     std::fs::create_dir_all(out).map_err(|e| Error::io(out, e))?;
+    if opts.resume.is_some() {
+        return Ok(());
+    }
+    let earlier = earlier_outputs(out, &case.name);
+    if earlier.is_empty() {
+        return Ok(());
+    }
+    if !opts.overwrite {
+        let names: Vec<String> = earlier
+            .iter()
+            .take(4)
+            .filter_map(|p| p.file_name().map(|n| n.to_string_lossy().into_owned()))
+            .collect();
+        return Err(Error::Invalid(format!(
+            "{} holds an earlier run of '{}' ({} files: {}{}): add --overwrite to replace them, --resume {} to go on from it, or choose another --out",
+            out.display(),
+            case.name,
+            earlier.len(),
+            names.join(", "),
+            if earlier.len() > 4 { ", …" } else { "" },
+            out.join("checkpoint.bin").display()
+        )));
+    }
+    for f in earlier {
+        std::fs::remove_file(&f).map_err(|e| Error::io(&f, e))?;
+    }
+    Ok(())
+}
+
+/// Refuse snapshots that would not fit on the output directory's disk.
+fn check_disk_space(case: &Case, n: usize, out: &Path) -> Result<()> {
+    let plan = crate::check::output_plan(case, n);
+    let Ok(free) = fs4::available_space(out) else {
+        return Ok(());
+    };
+    if plan.total_bytes > free as f64 {
+        return Err(Error::Invalid(format!(
+            "the run would write {} snapshots of {} each ({} in all, with the checkpoint), but the disk holding {} has {} free: raise [output] snapshot_interval, or free disk space",
+            plan.snapshots,
+            crate::check::human_bytes(plan.snapshot_bytes),
+            crate::check::human_bytes(plan.total_bytes),
+            out.display(),
+            crate::check::human_bytes(free as f64)
+        )));
+    }
+    Ok(())
+}
+
+fn run_dim<const D: usize>(case: &Case, opts: &RunOptions) -> Result<Summary> {
+    prepare_output(case, opts)?;
+    let out = &opts.out_dir;
     let mut sim = Simulation::<D>::new(case)?;
     let n = sim.particles.n_real;
-    let end = case.simulation.end_time;
+    if opts.write_fields {
+        check_disk_space(case, n, out)?;
+    }
     let max_steps = match (case.simulation.max_steps, opts.max_steps) {
         (Some(a), Some(b)) => Some(a.min(b)),
         (a, b) => a.or(b),
     };
-    let interval = case.output.snapshot_interval;
     let pvd_path = out.join(format!("{}.pvd", case.name));
     let history_path = out.join("history.csv");
 
     let (state, history, pvd) = match &opts.resume {
         Some(path) => {
-            let c = Checkpoint::<D>::read(path, &case.name)?;
+            let c = Checkpoint::<D>::read(path, case)?;
             if c.particles.n_real != n {
                 return Err(Error::Invalid(format!(
                     "{}: the checkpoint has {} particles, the deck makes {n}: the deck changed since",
@@ -176,10 +494,15 @@ fn run_dim<const D: usize>(case: &Case, opts: &RunOptions) -> Result<Summary> {
                     c.particles.n_real
                 )));
             }
-            sim.restore(c.particles, c.sim);
+            sim.restore(c.particles, c.sim, c.searches);
             let pvd = PvdWriter::resume(&pvd_path, c.run.snapshots.clone());
             let history = HistoryWriter::append(&history_path, c.run.history_len)?;
-            (c.run, history, pvd)
+            let mut state = c.run;
+            // The output settings may have changed since: the next snapshot is counted anew.
+            state.next_snapshot = case.output.snapshot_interval.map_or(f64::INFINITY, |i| {
+                next_output_time(sim.state.time, i, time_tolerance(case))
+            });
+            (state, history, pvd)
         }
         None => {
             let mut pending: Vec<(usize, f64)> = case
@@ -192,7 +515,7 @@ fn run_dim<const D: usize>(case: &Case, opts: &RunOptions) -> Result<Summary> {
             pending.sort_by(|a, b| a.1.total_cmp(&b.1));
             let state = RunState {
                 tally: Tally::new(case),
-                next_snapshot: interval.unwrap_or(f64::INFINITY),
+                next_snapshot: case.output.snapshot_interval.unwrap_or(f64::INFINITY),
                 snapshots: Vec::new(),
                 frames: vec![Vec::new(); case.output.pictures.len()],
                 pending_pictures: pending,
@@ -219,111 +542,41 @@ fn run_dim<const D: usize>(case: &Case, opts: &RunOptions) -> Result<Summary> {
         last_snapshot,
         start: Instant::now(),
     };
-    if !resumed {
-        run.snapshot()?;
-        run.take_pictures();
-    }
-
-    let bar = opts.progress.then(|| progress_bar(end));
-    let first_step = run.sim.state.step;
-    let mut last_log = Instant::now();
-    let mut status = "completed".to_string();
-    let mut failure = None;
-    let tol = 1e-9 * end;
-
-    while run.sim.state.time < end - tol && max_steps.is_none_or(|m| run.sim.state.step < m) {
-        let mut next_event = end.min(run.state.next_snapshot);
-        if let Some(&(_, t)) = run.state.pending_pictures.first() {
-            next_event = next_event.min(t);
-        }
-        let d = match run.sim.step((next_event - run.sim.state.time).max(tol)) {
-            Ok(d) => d,
-            Err(e) => {
-                status = format!("unstable: {e}");
-                // The particles are still at the last good state: keep it on disk.
-                run.snapshot()?;
-                failure = Some(e);
-                break;
+    let ending = if resumed {
+        run.time_loop(max_steps)
+    } else {
+        match run.snapshot() {
+            Ok(()) => {
+                run.take_pictures();
+                run.time_loop(max_steps)
             }
-        };
-        run.state.tally.add(&d);
-        if (run.sim.state.step - 1).is_multiple_of(case.output.history_every) {
-            run.history.row(&d)?;
+            Err(e) => Ending::Failed(e),
         }
-        if run.sim.state.time >= run.state.next_snapshot - tol {
-            while run.state.next_snapshot <= run.sim.state.time + tol {
-                run.state.next_snapshot += interval.unwrap_or(f64::INFINITY);
-            }
-            run.snapshot()?;
-        }
-        run.take_pictures();
-        let wall = run.start.elapsed().as_secs_f64();
-        let rate = n as f64 * (run.sim.state.step - first_step) as f64 / wall.max(1e-9);
-        if let Some(bar) = &bar {
-            bar.set_position((run.sim.state.time / end * 1000.0) as u64);
-            bar.set_message(format!(
-                "t = {:.4e} s, step {}, {:.3e} particle-steps/s",
-                run.sim.state.time, run.sim.state.step, rate
-            ));
-        } else if last_log.elapsed().as_secs_f64() > 10.0 {
-            last_log = Instant::now();
-            tracing::info!(
-                "t = {:.4e} s ({:.1} %), step {}, dt = {:.3e} s, {:.3e} particle-steps/s",
-                run.sim.state.time,
-                100.0 * run.sim.state.time / end,
-                run.sim.state.step,
-                d.dt,
-                rate
-            );
-        }
-    }
-    if let Some(bar) = &bar {
-        bar.finish_and_clear();
-    }
-    if failure.is_none() {
-        // The checkpoint first, so that a resumed run drops this closing row.
-        run.snapshot()?;
-        let last = run.state.tally.last.clone();
-        run.history.row(&last)?;
-    }
-    if opts.write_fields {
-        write_pictures(case, out, &run.sim.body_names, &run.state.frames)?;
-    }
-
-    let wall = run.state.wall_seconds + run.start.elapsed().as_secs_f64();
-    let steps = run.sim.state.step;
-    let tally = &run.state.tally;
-    let summary = Summary {
-        case: case.name.clone(),
-        dimension: D,
-        particles: n,
-        threads: rayon::current_num_threads(),
-        steps,
-        wall_seconds: wall,
-        particle_steps_per_second: n as f64 * steps as f64 / wall.max(1e-12),
-        interactions_per_second: tally.interactions as f64 / wall.max(1e-12),
-        mean_neighbors: tally.interactions as f64 / (n as f64 * steps.max(1) as f64),
-        searches: run.sim.state.searches,
-        partial_searches: run.sim.state.partial_searches,
-        end_time: run.sim.state.time,
-        energy_error: tally.energy_dev / tally.energy_scale.max(f64::MIN_POSITIVE),
-        initial_energy: tally.e0.unwrap_or(0.0),
-        final_energy: tally.last.total,
-        momentum_error: tally.momentum_dev
-            / (0..3)
-                .filter(|&k| tally.conserved[k])
-                .map(|k| tally.p0[k] * tally.p0[k])
-                .sum::<f64>()
-                .sqrt()
-                .max(tally.momentum_scale)
-                .max(f64::MIN_POSITIVE),
-        min_interbody_distance: tally.min_gap,
-        status,
     };
-    summary.write(&out.join("summary.json"))?;
-    match failure {
-        Some(e) => Err(e),
-        None => Ok(summary),
+    let ending = run.close(ending);
+    let step = run.sim.state.step;
+    let time = run.sim.state.time;
+    let (status, reason, error) = match ending {
+        Ending::Completed => ("completed", format!("reached the end time {:e} s", case.simulation.end_time), None),
+        Ending::MaxSteps(m) => (
+            "max_steps",
+            format!("stopped at step {m}, the step cap, at t = {time:e} s of {:e} s; resume from checkpoint.bin to go on", case.simulation.end_time),
+            None,
+        ),
+        Ending::Interrupted => (
+            "interrupted",
+            format!("stopped by a signal after step {step}, t = {time:e} s; a checkpoint was written: resume from checkpoint.bin to go on"),
+            Some(Error::Interrupted { step, time }),
+        ),
+        Ending::Unstable(e) => ("unstable", e.to_string(), Some(e)),
+        Ending::Failed(e) => ("failed", e.to_string(), Some(e)),
+    };
+    let summary = run.summary(status, reason);
+    let written = summary.write(&out.join("summary.json"));
+    match (error, written) {
+        (Some(e), _) => Err(e),
+        (None, Err(e)) => Err(e),
+        (None, Ok(())) => Ok(summary),
     }
 }
 
@@ -410,4 +663,39 @@ fn progress_bar(end: f64) -> indicatif::ProgressBar {
     );
     bar.set_message(format!("0 of {end:.4e} s"));
     bar
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// The next output time always lies ahead, however small the interval against the time.
+    #[test]
+    fn next_output_time_always_advances() {
+        assert_eq!(next_output_time(0.0, 1e-8, 1e-16), 1e-8);
+        let t = next_output_time(1e-8, 1e-8, 1e-16);
+        assert!((t - 2e-8).abs() < 1e-22, "{t}");
+        for (time, interval) in [(1e-7, 1e-300), (1e-7, 1e-12), (0.3, 1e-17), (5.0, 1.0)] {
+            let next = next_output_time(time, interval, 0.0);
+            assert!(next > time, "{time} {interval} → {next}");
+        }
+    }
+
+    /// Landing on an output shortens a step by at most 2; an output closer than half a step is
+    /// passed; the end time is always landed on.
+    #[test]
+    fn landing_costs_at_most_half_a_step() {
+        let dt = 1e-9;
+        for k in 1..400 {
+            let remaining = 1e-12 * k as f64 * k as f64 / 20.0;
+            let limit = land(remaining, dt, false);
+            assert!(limit >= 0.5 * dt, "{remaining}: {limit}");
+            let end = land(remaining, dt, true);
+            assert!(end <= remaining && end > 0.0);
+        }
+        assert_eq!(land(1e-15, dt, false), f64::INFINITY);
+        assert_eq!(land(0.7e-9, dt, false), 0.7e-9);
+        assert_eq!(land(1.5e-9, dt, false), 0.75e-9);
+        assert_eq!(land(1e-15, dt, true), 1e-15);
+    }
 }

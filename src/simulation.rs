@@ -52,6 +52,7 @@ pub struct Simulation<const D: usize> {
     pub body_names: Vec<String>,
     /// Time, step and the other scalars a checkpoint keeps.
     pub state: SimState,
+    pub stats: SearchStats,
     neighbors: NeighborList,
     ghosts: boundary::Ghosts,
     rates: Rates<D>,
@@ -60,9 +61,6 @@ pub struct Simulation<const D: usize> {
     sums_old: Vec<Sums>,
     sums_new: Vec<Sums>,
     body_force_blocks: Vec<[f64; 3]>,
-    /// Search at the next step whatever the skin says (after a checkpoint, so that a resumed
-    /// run, which must search first, stays bit-identical).
-    force_search: bool,
 }
 
 /// The scalar state of a run in progress, beside its particles: what a checkpoint keeps.
@@ -77,11 +75,17 @@ pub struct SimState {
     pub dt_first: Option<f64>,
     /// A particle faster than this has gone unstable (m/s).
     pub speed_limit: f64,
-    /// Neighbour searches made so far: full builds, and partial rebuilds (see `neighbors`).
-    pub searches: u64,
-    pub partial_searches: u64,
     /// Step of the last reordering into cell order.
     pub last_reorder: u64,
+}
+
+/// Neighbour searches made so far: full builds, and steps with partial rebuilds (see
+/// `neighbors`). Bookkeeping only: when a search happens does not change the results (the
+/// lists are in canonical order), and a resumed run searches at its first step.
+#[derive(Debug, Clone, Copy, Default, PartialEq, serde::Serialize, serde::Deserialize)]
+pub struct SearchStats {
+    pub searches: u64,
+    pub partial_searches: u64,
 }
 
 /// Sums over the particles are taken per block of this many particles, in parallel, and the
@@ -185,10 +189,9 @@ impl<const D: usize> Simulation<D> {
                 // DESIGN.md: 10× the fastest initial speed. Bodies starting at rest (a block on
                 // an incline) would trip that at once, so the sound speed bounds it from below.
                 speed_limit: 10.0 * v0.max(c0),
-                searches: 0,
-                partial_searches: 0,
                 last_reorder: 0,
             },
+            stats: SearchStats::default(),
             neighbors: NeighborList::default(),
             ghosts: boundary::Ghosts::default(),
             rates: Rates::default(),
@@ -196,24 +199,25 @@ impl<const D: usize> Simulation<D> {
             sums_old: Vec::new(),
             sums_new: Vec::new(),
             body_force_blocks: Vec::new(),
-            force_search: false,
         })
     }
 
-    /// The state a checkpoint keeps: the real particles and the scalars. Taking it makes the
-    /// next step search afresh, as a run resumed from it will.
-    pub fn checkpoint_state(&mut self) -> (Particles<D>, SimState) {
-        self.force_search = true;
+    /// The state a checkpoint keeps: the real particles and the scalars. Neighbour lists and
+    /// ghosts are left out: a resumed run rebuilds them, and as lists are summed in canonical
+    /// order that changes no bit of the results.
+    pub fn checkpoint_state(&self) -> (Particles<D>, SimState, SearchStats) {
         let mut particles = self.particles.clone();
         particles.truncate_to_real();
-        (particles, self.state.clone())
+        (particles, self.state.clone(), self.stats)
     }
 
     /// Continue from a checkpoint's state (the case must be the one it was written for).
-    pub fn restore(&mut self, particles: Particles<D>, state: SimState) {
+    pub fn restore(&mut self, particles: Particles<D>, state: SimState, stats: SearchStats) {
         self.particles = particles;
         self.state = state;
-        self.force_search = true;
+        self.stats = stats;
+        self.neighbors = NeighborList::default();
+        self.ghosts = boundary::Ghosts::default();
     }
 
     /// Advance one step, of at most `dt_max`. On instability the particles are left at t_n
@@ -226,7 +230,7 @@ impl<const D: usize> Simulation<D> {
         // at the latest, when the real particles are also put back in cell order.
         self.ghosts.update(p, &self.symmetry);
         let reorder = self.state.step >= self.state.last_reorder + REORDER_EVERY;
-        let mut need = if reorder || self.force_search {
+        let mut need = if reorder {
             Refresh::Full
         } else {
             self.neighbors.refresh(&p.x, &p.h)
@@ -240,19 +244,19 @@ impl<const D: usize> Simulation<D> {
         }
         if need == Refresh::Partial {
             self.neighbors.rebuild_dirty(&p.x, &p.h);
-            self.state.partial_searches += 1;
+            self.stats.partial_searches += 1;
         }
         if need == Refresh::Full {
-            self.force_search = false;
             if reorder && self.state.step > 0 {
-                let n = p.n_real;
+                // Cell order of the real particles' current positions: a function of the
+                // state alone, so a resumed run reorders exactly as the uninterrupted one.
+                p.truncate_to_real();
                 self.order.clear();
                 self.order.extend(
                     self.neighbors
-                        .cell_order()
+                        .cell_order(&p.x, &p.h)
                         .iter()
-                        .map(|&i| i as usize)
-                        .filter(|&i| i < n),
+                        .map(|&i| i as usize),
                 );
                 p.permute(&self.order);
                 self.state.last_reorder = self.state.step;
@@ -261,7 +265,7 @@ impl<const D: usize> Simulation<D> {
             let skin = SKIN * h_max;
             self.ghosts.rebuild(p, &self.symmetry, 2.0 * h_max + skin);
             self.neighbors.build(&p.x, &p.h, p.n_real, skin);
-            self.state.searches += 1;
+            self.stats.searches += 1;
         }
         match self.kernel {
             KernelKind::CubicSpline => physics::compute_rates(
@@ -430,6 +434,18 @@ impl<const D: usize> Simulation<D> {
         });
         let (i, cause) = match bad {
             Some(b) => b,
+            None if !(dt.is_finite() && dt > 0.0) || self.state.time + dt == self.state.time => {
+                let i = (0..p.n_real)
+                    .min_by(|&a, &b| r[a].dt.total_cmp(&r[b].dt))
+                    .unwrap_or(0);
+                (
+                    i,
+                    format!(
+                        "the time step {dt:.4e} s does not advance the time {:.6e} s (speed {:.4e} m/s, sound speed {:.4e} m/s, h {:.4e} m); this particle sets it",
+                        self.state.time, p.v[i].norm(), p.c[i], p.h[i]
+                    ),
+                )
+            }
             None if dt_stable < 1e-6 * dt_first || dt_stable.is_nan() => {
                 let i = (0..p.n_real)
                     .min_by(|&a, &b| r[a].dt.total_cmp(&r[b].dt))

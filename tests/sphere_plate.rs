@@ -95,11 +95,12 @@ fn coarse_sphere_plate_summary() {
         progress: false,
         max_steps: Some(60),
         write_fields: false,
-        resume: None,
+        overwrite: true,
+        ..Default::default()
     };
     let s = run(&case, &opts).unwrap();
     println!("{s:?}");
-    assert_eq!(s.status, "completed");
+    assert_eq!(s.status, "max_steps");
     assert_eq!(s.steps, 60);
     assert!(
         s.momentum_error < 1e-10,

@@ -1,6 +1,8 @@
-//! Output files: .vtp/.pvd checked with VTK's own reader (through `tests/vtk_check.py` in the
-//! `.venv` made by `.ci/setup_python.sh`) and read back byte by byte; PNG pictures checked for
+//! Output files: .vtp/.pvd checked with VTK's own reader (through `tests/vtk_check.py`, in the
+//! Python environment the tests provision themselves, see `tests/support`) and read back byte by byte; PNG pictures checked for
 //! size and content.
+
+mod support;
 
 use std::path::{Path, PathBuf};
 use std::process::Command;
@@ -21,14 +23,7 @@ fn out_dir(name: &str) -> PathBuf {
 }
 
 fn python() -> PathBuf {
-    let py = Path::new(env!("CARGO_MANIFEST_DIR")).join(".venv/bin/python");
-    assert!(
-        py.exists(),
-        "{} is missing: run .ci/setup_python.sh first (it creates .venv with VTK's python \
-         package, which these tests use to read the files back)",
-        py.display()
-    );
-    py
+    support::vtk_python()
 }
 
 /// Run tests/vtk_check.py on `file`; panics with its output unless it succeeds.

@@ -64,18 +64,9 @@ pub fn estimate_particles(shape: &Shape, spacing: f64, dimension: usize) -> f64 
     measure / spacing.powi(dimension as i32)
 }
 
-/// MemAvailable from /proc/meminfo, in bytes; None where it cannot be read.
+/// Memory this process may still use (see [`crate::machine::available_memory`]).
 fn available_memory() -> Option<f64> {
-    let info = std::fs::read_to_string("/proc/meminfo").ok()?;
-    let line = info.lines().find(|l| l.starts_with("MemAvailable:"))?;
-    let mut words = line.split_whitespace().skip(1);
-    let value: f64 = words.next()?.parse().ok()?;
-    let scale = match words.next() {
-        Some("kB") | Some("KB") => 1024.0,
-        Some("MB") => 1024.0 * 1024.0,
-        _ => 1.0,
-    };
-    Some(value * scale)
+    crate::machine::available_memory()
 }
 
 // ---------------------------------------------------------------------------------------------
@@ -430,6 +421,45 @@ impl Ctx<'_> {
     }
 }
 
+/// Names (the case's, the bodies') name files in the output directory and columns of
+/// `history.csv`: ASCII letters, digits, `_`, `-` and `.`, starting with a letter or digit, at
+/// most this many characters — never a path, never anything a CSV field or a shell must quote.
+const MAX_NAME: usize = 64;
+
+fn safe_char(c: char) -> bool {
+    c.is_ascii_alphanumeric() || matches!(c, '_' | '-' | '.')
+}
+
+impl Ctx<'_> {
+    /// A name of the safe set (see [`MAX_NAME`]).
+    fn safe_name(&self, v: &S<String>, key: &str, what: &str, example: &str) -> Result<()> {
+        let name = v.get_ref();
+        let problem = if name.is_empty() {
+            Some("must not be empty".to_string())
+        } else if name.chars().count() > MAX_NAME {
+            Some(format!(
+                "is {} characters long, more than {MAX_NAME}",
+                name.chars().count()
+            ))
+        } else if let Some(c) = name.chars().find(|&c| !safe_char(c)) {
+            Some(format!("holds {c:?}, which is not allowed"))
+        } else if !name.starts_with(|c: char| c.is_ascii_alphanumeric()) {
+            Some("must start with a letter or a digit".to_string())
+        } else {
+            None
+        };
+        match problem {
+            None => Ok(()),
+            Some(p) => Err(self.fail(
+                v.span(),
+                key,
+                format!("{what} {name:?} {p}"),
+                format!("{what} names output files and history columns: use only ASCII letters, digits, `_`, `-` and `.`, starting with a letter or digit, at most {MAX_NAME} characters, e.g. {example}"),
+            )),
+        }
+    }
+}
+
 fn span_of<T>(v: &Option<S<T>>) -> Option<Range<usize>> {
     v.as_ref().map(|s| s.span())
 }
@@ -438,6 +468,14 @@ fn span_of<T>(v: &Option<S<T>>) -> Option<Range<usize>> {
 // Building the case.
 
 const AXES: [&str; 3] = ["x", "y", "z"];
+
+/// Body speeds at or above this (m/s) are refused: a thousandth of the speed of light, far
+/// above any impact of solids (meteoroids reach about 7e4 m/s), far below where the first time
+/// step h/(c + v) would round away.
+const MAX_SPEED: f64 = 3.0e5;
+
+/// A run writes at most this many snapshots.
+pub const MAX_SNAPSHOTS: f64 = 100_000.0;
 
 impl Ctx<'_> {
     fn build(&self, deck: &raw::Deck, memory: Option<f64>) -> Result<Case> {
@@ -487,14 +525,7 @@ impl Ctx<'_> {
                     "add e.g. `name = \"plate\"`",
                 )
             })?;
-            if name.get_ref().trim().is_empty() {
-                return Err(self.fail(
-                    name.span(),
-                    format!("{prefix}.name"),
-                    "a body name must not be empty",
-                    "give a name such as \"plate\"",
-                ));
-            }
+            self.safe_name(name, &format!("{prefix}.name"), "a body name", "\"plate\"")?;
             if let Some(first) = body_names.get(name.get_ref()) {
                 let (line, _) = self.line_col(first.start);
                 return Err(self.fail(
@@ -566,16 +597,33 @@ impl Ctx<'_> {
                 }
             };
             let velocity = match &b.velocity {
-                Some(v) => self.vector(
-                    v,
-                    &format!("{prefix}.velocity"),
-                    dimension,
-                    if dimension == 2 {
-                        "[0.0, -7000.0]"
-                    } else {
-                        "[0.0, 0.0, -7000.0]"
-                    },
-                )?,
+                Some(v) => {
+                    let key = format!("{prefix}.velocity");
+                    let velocity = self.vector(
+                        v,
+                        &key,
+                        dimension,
+                        if dimension == 2 {
+                            "[0.0, -7000.0]"
+                        } else {
+                            "[0.0, 0.0, -7000.0]"
+                        },
+                    )?;
+                    let speed = velocity.iter().map(|c| c * c).sum::<f64>().sqrt();
+                    if speed >= MAX_SPEED {
+                        return Err(self.fail(
+                            v.span(),
+                            key,
+                            format!(
+                                "the speed {} m/s is at or beyond {} m/s: no solid impact happens there, and the first time step would vanish",
+                                num(speed),
+                                num(MAX_SPEED)
+                            ),
+                            "give the velocity in m/s, e.g. 7000 for a hypervelocity impact",
+                        ));
+                    }
+                    velocity
+                }
                 None => [0.0; 3],
             };
             let motion = match &b.motion {
@@ -659,21 +707,28 @@ impl Ctx<'_> {
     ) -> Result<(String, usize, Simulation)> {
         let anchor = sim.anchor();
         let s = sim.get_ref();
-        let name =
-            match &s.name {
-                Some(n) if n.get_ref().trim().is_empty() => return Err(self.fail(
-                    n.span(),
-                    "simulation.name",
-                    "the case name must not be empty",
-                    "give a name such as \"sphere_plate\", or leave it out to use the file's stem",
-                )),
-                Some(n) => n.get_ref().clone(),
-                None => Path::new(self.file)
+        let name = match &s.name {
+            Some(n) => {
+                self.safe_name(n, "simulation.name", "the case name", "\"sphere_plate\"")?;
+                n.get_ref().clone()
+            }
+            // The file's stem, with anything outside the safe set made an underscore.
+            None => {
+                let stem: String = Path::new(self.file)
                     .file_stem()
                     .map(|s| s.to_string_lossy().into_owned())
-                    .filter(|s| !s.is_empty())
-                    .unwrap_or_else(|| "case".to_string()),
-            };
+                    .unwrap_or_default()
+                    .chars()
+                    .map(|c| if safe_char(c) { c } else { '_' })
+                    .take(MAX_NAME)
+                    .collect();
+                if stem.starts_with(|c: char| c.is_ascii_alphanumeric()) {
+                    stem
+                } else {
+                    format!("case{stem}").chars().take(MAX_NAME).collect()
+                }
+            }
+        };
         let dimension = match &s.dimension {
             Some(d) if matches!(d.get_ref(), 2 | 3) => *d.get_ref() as usize,
             Some(d) => {
@@ -1690,11 +1745,29 @@ impl Ctx<'_> {
         };
         let o = o.get_ref();
         if let Some(s) = &o.snapshot_interval {
-            out.snapshot_interval = Some(self.positive(
+            let interval = self.positive(
                 s,
                 "output.snapshot_interval",
                 "simulated time between snapshots in s, e.g. 1.0e-8",
-            )?);
+            )?;
+            let count = end_time / interval;
+            if count > MAX_SNAPSHOTS {
+                return Err(self.fail(
+                    s.span(),
+                    "output.snapshot_interval",
+                    format!(
+                        "snapshot_interval {} s would write {count:.3e} snapshots over end_time = {} s, more than {MAX_SNAPSHOTS} (each holds every particle)",
+                        num(interval),
+                        num(end_time)
+                    ),
+                    format!(
+                        "use at least end_time / {MAX_SNAPSHOTS} = {} s; e.g. {} s gives 100 snapshots",
+                        num(end_time / MAX_SNAPSHOTS),
+                        num(end_time / 100.0)
+                    ),
+                ));
+            }
+            out.snapshot_interval = Some(interval);
         }
         if let Some(h) = &o.history_every {
             if *h.get_ref() < 1 {

@@ -2,18 +2,20 @@
 //!
 //! A checkpoint holds the real particles, the simulation's scalar state and the run's own
 //! bookkeeping (summary tallies, output schedule, snapshots listed, cross-section frames taken).
-//! Neighbour lists and ghosts are not stored: taking a checkpoint makes the live run search
-//! afresh at its next step, as a resumed one must, so both continue identically.
+//! Neighbour lists and ghosts are not stored: a resumed run rebuilds them, and since every sum
+//! over neighbours runs in canonical order (see `neighbors`), when the lists were built changes
+//! no bit of the results.
 
+use crate::case::Case;
 use crate::error::{Error, Result};
 use crate::output::picture::SectionFrame;
 use crate::particles::Particles;
-use crate::simulation::{Diagnostics, SimState};
+use crate::simulation::{Diagnostics, SearchStats, SimState};
 use serde::{Deserialize, Serialize};
 use std::path::Path;
 
 /// Format version, checked on reading.
-pub const FORMAT: u32 = 1;
+pub const FORMAT: u32 = 2;
 
 /// The running totals behind `summary.json`.
 #[derive(Debug, Clone, Default, PartialEq, Serialize, Deserialize)]
@@ -50,46 +52,100 @@ pub struct RunState {
 /// A checkpoint of a `D`-dimensional run.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 pub struct Checkpoint<const D: usize> {
-    pub format: u32,
     pub case: String,
+    /// The deck's physical set-up ([`Case::physics_fingerprint`]): resuming with another is
+    /// refused, naming what differs.
+    pub physics: Vec<(String, String)>,
     pub particles: Particles<D>,
     pub sim: SimState,
+    pub searches: SearchStats,
     pub run: RunState,
 }
 
+/// The file starts with these 8 bytes, then the format version (u32), the CRC-32 of the
+/// payload (u32) and the payload's length (u64), all little-endian, then the payload (postcard).
+const MAGIC: &[u8; 8] = b"STRIKECP";
+const HEADER: usize = 8 + 4 + 4 + 8;
+
 impl<const D: usize> Checkpoint<D> {
-    /// Write through a temporary file and a rename, so a crash never leaves half a checkpoint.
+    /// Write atomically (see [`crate::output::atomic`]), so a crash never leaves half a
+    /// checkpoint, with a checksum so that a damaged one is refused.
     pub fn write(&self, path: &Path) -> Result<()> {
-        let bytes = postcard::to_stdvec(self).map_err(|e| {
+        let payload = postcard::to_stdvec(self).map_err(|e| {
             Error::Invalid(format!("{}: cannot encode checkpoint: {e}", path.display()))
         })?;
-        let mut tmp = path.as_os_str().to_owned();
-        tmp.push(".tmp");
-        std::fs::write(&tmp, bytes).map_err(|e| Error::io(&tmp, e))?;
-        std::fs::rename(&tmp, path).map_err(|e| Error::io(path, e))
+        let mut bytes = Vec::with_capacity(HEADER + payload.len());
+        bytes.extend_from_slice(MAGIC);
+        bytes.extend_from_slice(&FORMAT.to_le_bytes());
+        bytes.extend_from_slice(&crc32fast::hash(&payload).to_le_bytes());
+        bytes.extend_from_slice(&(payload.len() as u64).to_le_bytes());
+        bytes.extend_from_slice(&payload);
+        crate::output::atomic::write(path, &bytes)
     }
 
-    /// Read a checkpoint written for case `case` in `D` dimensions.
-    pub fn read(path: &Path, case: &str) -> Result<Self> {
+    /// Read a checkpoint written for `case` in `D` dimensions: a file that is not a checkpoint,
+    /// is damaged (checksum), is of another case or dimension, or was written with another
+    /// physical set-up is refused with what is wrong.
+    pub fn read(path: &Path, case: &Case) -> Result<Self> {
         let bytes = std::fs::read(path).map_err(|e| Error::io(path, e))?;
-        let c: Self = postcard::from_bytes(&bytes).map_err(|e| {
-            Error::Invalid(format!(
-                "{}: not a strike checkpoint of a {D}D case (or a damaged one): {e}",
-                path.display()
-            ))
-        })?;
-        if c.format != FORMAT {
-            return Err(Error::Invalid(format!(
-                "{}: checkpoint format {} is not the {FORMAT} this strike reads",
-                path.display(),
-                c.format
+        let bad = |what: String| Error::Invalid(format!("{}: {what}", path.display()));
+        if bytes.len() < HEADER || &bytes[..8] != MAGIC {
+            return Err(bad(
+                "not a strike checkpoint (checkpoint.bin in a run's output directory)".into(),
+            ));
+        }
+        let word =
+            |k: usize| u32::from_le_bytes([bytes[k], bytes[k + 1], bytes[k + 2], bytes[k + 3]]);
+        let format = word(8);
+        if format != FORMAT {
+            return Err(bad(format!(
+                "checkpoint format {format} is not the {FORMAT} this strike reads"
             )));
         }
-        if c.case != case {
-            return Err(Error::Invalid(format!(
-                "{}: this checkpoint is of case '{}', not '{case}': resume it with its own deck",
-                path.display(),
-                c.case
+        let mut len = [0u8; 8];
+        len.copy_from_slice(&bytes[16..24]);
+        let payload = &bytes[HEADER..];
+        if u64::from_le_bytes(len) != payload.len() as u64 {
+            return Err(bad(format!(
+                "damaged checkpoint: {} bytes of data where the header says {} (truncated?)",
+                payload.len(),
+                u64::from_le_bytes(len)
+            )));
+        }
+        if crc32fast::hash(payload) != word(12) {
+            return Err(bad(
+                "damaged checkpoint: its checksum does not match its contents".into(),
+            ));
+        }
+        let c: Self = postcard::from_bytes(payload).map_err(|e| {
+            bad(format!(
+                "not a checkpoint of a {D}D case (or a damaged one): {e}"
+            ))
+        })?;
+        if c.case != case.name {
+            return Err(bad(format!(
+                "this checkpoint is of case '{}', not '{}': resume it with its own deck",
+                c.case, case.name
+            )));
+        }
+        let now = case.physics_fingerprint();
+        let mut changes = Vec::new();
+        for (key, then) in &c.physics {
+            match now.iter().find(|(k, _)| k == key) {
+                Some((_, v)) if v == then => {}
+                Some((_, v)) => changes.push(format!("{key}: was {then}, is now {v}")),
+                None => changes.push(format!("{key}: was {then}, is now absent")),
+            }
+        }
+        for (key, v) in &now {
+            if !c.physics.iter().any(|(k, _)| k == key) {
+                changes.push(format!("{key}: new, {v}"));
+            }
+        }
+        if !changes.is_empty() {
+            return Err(bad(format!(
+                "the deck's physical set-up changed since this checkpoint was written, so the run cannot go on from it ({}). Only the end time, the step cap and the output settings may change on resuming; start afresh for the rest",
+                changes.join("; ")
             )));
         }
         Ok(c)

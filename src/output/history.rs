@@ -1,4 +1,5 @@
-//! `history.csv`: one row of global quantities every N steps.
+//! `history.csv`: one row of global quantities every N steps, written and read as CSV
+//! (RFC 4180 quoting, by the `csv` crate: a body name is a header field whatever it holds).
 
 use crate::error::{Error, Result};
 use crate::simulation::Diagnostics;
@@ -26,17 +27,28 @@ impl HistoryWriter {
             out: BufWriter::new(file),
             len: 0,
         };
-        let mut header = String::from(
-            "time,dt,kinetic_energy,internal_energy,contact_energy,gravity_energy,total_energy,\
-             momentum_x,momentum_y,momentum_z,max_pressure,min_interbody_distance",
-        );
+        let mut header: Vec<String> = [
+            "time",
+            "dt",
+            "kinetic_energy",
+            "internal_energy",
+            "contact_energy",
+            "gravity_energy",
+            "total_energy",
+            "momentum_x",
+            "momentum_y",
+            "momentum_z",
+            "max_pressure",
+            "min_interbody_distance",
+        ]
+        .map(String::from)
+        .to_vec();
         for name in body_names {
             for k in ["x", "y", "z"] {
-                header.push_str(&format!(",contact_force_{name}_{k}"));
+                header.push(format!("contact_force_{name}_{k}"));
             }
         }
-        header.push('\n');
-        w.write(&header)?;
+        w.write_record(&header)?;
         Ok(w)
     }
 
@@ -69,8 +81,7 @@ impl HistoryWriter {
 
     /// Append one row.
     pub fn row(&mut self, d: &Diagnostics) -> Result<()> {
-        let mut line = format!(
-            "{:e},{:e},{:e},{:e},{:e},{:e},{:e},{:e},{:e},{:e},{:e},",
+        let mut fields: Vec<String> = [
             d.time,
             d.dt,
             d.kinetic,
@@ -81,22 +92,32 @@ impl HistoryWriter {
             d.momentum[0],
             d.momentum[1],
             d.momentum[2],
-            d.max_pressure
+            d.max_pressure,
+        ]
+        .iter()
+        .map(|x| format!("{x:e}"))
+        .collect();
+        fields.push(
+            d.min_interbody_distance
+                .map_or(String::new(), |g| format!("{g:e}")),
         );
-        if let Some(g) = d.min_interbody_distance {
-            line.push_str(&format!("{g:e}"));
-        }
         for f in &d.body_contact_force {
-            line.push_str(&format!(",{:e},{:e},{:e}", f[0], f[1], f[2]));
+            fields.extend(f.iter().map(|x| format!("{x:e}")));
         }
-        line.push('\n');
-        self.write(&line)
+        self.write_record(&fields)
     }
 
-    fn write(&mut self, s: &str) -> Result<()> {
-        self.len += s.len() as u64;
+    /// One CSV record, flushed.
+    fn write_record(&mut self, fields: &[String]) -> Result<()> {
+        let mut w = csv::Writer::from_writer(Vec::new());
+        w.write_record(fields)
+            .map_err(|e| Error::Invalid(format!("{}: {e}", self.path.display())))?;
+        let bytes = w
+            .into_inner()
+            .map_err(|e| Error::Invalid(format!("{}: {e}", self.path.display())))?;
+        self.len += bytes.len() as u64;
         self.out
-            .write_all(s.as_bytes())
+            .write_all(&bytes)
             .and_then(|_| self.out.flush())
             .map_err(|e| Error::io(&self.path, e))
     }
@@ -111,21 +132,25 @@ pub struct History {
 
 impl History {
     pub fn read(path: &Path) -> Result<Self> {
-        let text = std::fs::read_to_string(path).map_err(|e| Error::io(path, e))?;
-        let mut lines = text.lines();
-        let columns = lines
-            .next()
-            .unwrap_or_default()
-            .split(',')
+        let file = File::open(path).map_err(|e| Error::io(path, e))?;
+        let bad = |e: csv::Error| Error::Invalid(format!("{}: {e}", path.display()));
+        let mut r = csv::ReaderBuilder::new().flexible(true).from_reader(file);
+        let columns = r
+            .headers()
+            .map_err(bad)?
+            .iter()
             .map(str::to_string)
             .collect();
-        let rows = lines
-            .map(|l| {
-                l.split(',')
+        let mut rows = Vec::new();
+        for record in r.records() {
+            let record = record.map_err(bad)?;
+            rows.push(
+                record
+                    .iter()
                     .map(|c| c.parse().unwrap_or(f64::NAN))
-                    .collect()
-            })
-            .collect();
+                    .collect(),
+            );
+        }
         Ok(History { columns, rows })
     }
 
@@ -138,5 +163,34 @@ impl History {
                 .map(|r| r.get(k).copied().unwrap_or(f64::NAN))
                 .collect(),
         )
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// Body names with a comma or a quote stay one header field each, and every row has as
+    /// many fields as the header.
+    #[test]
+    fn names_with_commas_and_quotes_are_quoted() {
+        let dir = std::env::temp_dir().join(format!("strike_history_{}", std::process::id()));
+        std::fs::create_dir_all(&dir).unwrap();
+        let path = dir.join("history.csv");
+        let names = vec!["a,b".to_string(), "say \"hi\"".to_string()];
+        let mut w = HistoryWriter::create(&path, &names).unwrap();
+        let d = Diagnostics {
+            time: 1.5,
+            body_contact_force: vec![[1.0, 2.0, 3.0], [4.0, 5.0, 6.0]],
+            ..Default::default()
+        };
+        w.row(&d).unwrap();
+        drop(w);
+        let h = History::read(&path).unwrap();
+        assert_eq!(h.columns.len(), 12 + 6);
+        assert!(h.rows.iter().all(|r| r.len() == h.columns.len()));
+        assert_eq!(h.column("contact_force_a,b_y").unwrap(), vec![2.0]);
+        assert_eq!(h.column("contact_force_say \"hi\"_z").unwrap(), vec![6.0]);
+        let _ = std::fs::remove_dir_all(&dir);
     }
 }

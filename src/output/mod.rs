@@ -1,5 +1,6 @@
 //! Output: ParaView snapshots, history, summary, pictures. Output never changes particles.
 
+pub mod atomic;
 pub mod checkpoint;
 pub mod history;
 pub mod picture;

@@ -35,14 +35,21 @@ pub struct Summary {
     /// Smallest distance between particles of different bodies over the run, / Δp_avg
     /// (None: bodies never came within the kernel support, or one body).
     pub min_interbody_distance: Option<f64>,
-    /// "completed", or the reason the run stopped.
+    /// Which part of the bodies the run models (symmetry planes), and so what the totals above
+    /// and in `history.csv` are totals of.
+    pub modelled_part: String,
+    /// How the run ended: `completed` (end time reached), `max_steps` (the step cap, as asked),
+    /// `interrupted` (SIGINT/SIGTERM, checkpoint written), `unstable` (last good state kept) or
+    /// `failed` (an output could not be written).
     pub status: String,
+    /// The ending in words: for `unstable`, the particle, its body, place and cause.
+    pub reason: String,
 }
 
 impl Summary {
     pub fn write(&self, path: &Path) -> Result<()> {
         let text = serde_json::to_string_pretty(self).map_err(|e| Error::Invalid(e.to_string()))?;
-        std::fs::write(path, text + "\n").map_err(|e| Error::io(path, e))
+        crate::output::atomic::write(path, (text + "\n").as_bytes())
     }
 
     pub fn read(path: &Path) -> Result<Self> {

@@ -13,6 +13,7 @@ use std::io::{BufWriter, Write};
 use std::path::{Path, PathBuf};
 
 use crate::error::{Error, Result};
+use crate::output::atomic;
 use crate::particles::Particles;
 use crate::tensor;
 
@@ -174,6 +175,19 @@ fn data_array_xml(xml: &mut String, indent: &str, a: &Array, offset: u64, tuples
     let _ = writeln!(xml, " format=\"appended\" offset=\"{offset}\"/>");
 }
 
+/// Size in bytes of a snapshot of `n` particles: the point data of [`POINT_DATA`], the points
+/// (3 × f64), the vertex connectivity and offsets (2 × i64), each array's 8-byte count, and a
+/// few kB of XML.
+pub fn snapshot_bytes(n: usize) -> u64 {
+    let per_point: usize = POINT_DATA
+        .iter()
+        .map(|(_, ty, ncomp)| ncomp * if *ty == "Int32" { 4 } else { 8 })
+        .sum::<usize>()
+        + 24
+        + 16;
+    (n * per_point + 8 * (POINT_DATA.len() + 4) + 4096) as u64
+}
+
 /// Bytes gathered before they go to the writer.
 const CHUNK: usize = 1 << 16;
 
@@ -254,12 +268,28 @@ pub fn write_snapshot<const D: usize>(
         "      </Verts>\n    </Piece>\n  </PolyData>\n  <AppendedData encoding=\"raw\">\n   _",
     );
 
-    let file = File::create(path).map_err(|e| Error::io(path, e))?;
-    let mut w = BufWriter::with_capacity(1 << 20, file);
+    atomic::write_with(path, |tmp| {
+        let file = File::create(tmp).map_err(|e| Error::io(path, e))?;
+        write_appended(
+            path,
+            BufWriter::with_capacity(1 << 20, file),
+            &xml,
+            &[&field, &pd, &points, &verts],
+        )
+    })
+}
+
+/// The XML header, then each array's byte count and data, then the closing tags.
+fn write_appended(
+    path: &Path,
+    mut w: BufWriter<File>,
+    xml: &str,
+    groups: &[&[Array]],
+) -> Result<()> {
     let io = |e: std::io::Error| Error::io(path, e);
     w.write_all(xml.as_bytes()).map_err(io)?;
     let mut buf = Vec::with_capacity(CHUNK + 128);
-    for a in field.iter().chain(&pd).chain(&points).chain(&verts) {
+    for a in groups.iter().flat_map(|g| g.iter()) {
         let count = a.byte_count();
         w.write_all(&count.to_le_bytes()).map_err(io)?;
         let mut written = 0u64;
@@ -366,12 +396,7 @@ impl PvdWriter {
         }
         xml.push_str("  </Collection>\n</VTKFile>\n");
 
-        let mut tmp = self.path.clone().into_os_string();
-        tmp.push(".tmp");
-        let tmp = PathBuf::from(tmp);
-        std::fs::write(&tmp, xml.as_bytes()).map_err(|e| Error::io(&tmp, e))?;
-        std::fs::rename(&tmp, &self.path).map_err(|e| Error::io(&self.path, e))?;
-        Ok(())
+        atomic::write(&self.path, xml.as_bytes())
     }
 }
 

@@ -1,0 +1,96 @@
+//! What this machine lets a run use: memory (the least of what the system has available, the
+//! control group's limit and the process's resource limits) and cores. Read from Linux's
+//! `/proc` and `/sys`; elsewhere the figures are unknown (None) and nothing is refused on them.
+
+/// Bytes this process can still allocate: the least of MemAvailable, the cgroup's memory limit
+/// less its usage (v2 and v1), and the address-space and data-segment limits (`ulimit -v`,
+/// `ulimit -d`) less what the process already maps. The address-space figure keeps a quarter
+/// in reserve for thread stacks and allocator arenas, which count against it but hold no data.
+pub fn available_memory() -> Option<f64> {
+    let mut best: Option<f64> = None;
+    let mut take = |x: Option<f64>| {
+        if let Some(x) = x {
+            best = Some(best.map_or(x, |b: f64| b.min(x)));
+        }
+    };
+    take(meminfo("MemAvailable:"));
+    take(cgroup_v2().or_else(cgroup_v1));
+    let status = std::fs::read_to_string("/proc/self/status").ok();
+    let mapped = |key: &str| status.as_deref().and_then(|s| kb_field(s, key));
+    if let Some(limit) = rlimit("Max address space") {
+        take(Some(
+            0.75 * (limit - mapped("VmSize:").unwrap_or(0.0)).max(0.0),
+        ));
+    }
+    if let Some(limit) = rlimit("Max data size") {
+        take(Some((limit - mapped("VmData:").unwrap_or(0.0)).max(0.0)));
+    }
+    best
+}
+
+/// Cores available to this process.
+pub fn cores() -> usize {
+    std::thread::available_parallelism().map_or(1, |c| c.get())
+}
+
+fn meminfo(key: &str) -> Option<f64> {
+    kb_field(&std::fs::read_to_string("/proc/meminfo").ok()?, key)
+}
+
+/// A "Key:   123 kB" line's value in bytes.
+fn kb_field(text: &str, key: &str) -> Option<f64> {
+    let line = text.lines().find(|l| l.starts_with(key))?;
+    let mut words = line[key.len()..].split_whitespace();
+    let value: f64 = words.next()?.parse().ok()?;
+    let scale = match words.next() {
+        Some("kB") | Some("KB") => 1024.0,
+        Some("MB") => 1024.0 * 1024.0,
+        _ => 1.0,
+    };
+    Some(value * scale)
+}
+
+fn read_number(path: &str) -> Option<f64> {
+    std::fs::read_to_string(path).ok()?.trim().parse().ok()
+}
+
+fn cgroup_v2() -> Option<f64> {
+    let max = read_number("/sys/fs/cgroup/memory.max")?;
+    Some((max - read_number("/sys/fs/cgroup/memory.current").unwrap_or(0.0)).max(0.0))
+}
+
+fn cgroup_v1() -> Option<f64> {
+    let max = read_number("/sys/fs/cgroup/memory/memory.limit_in_bytes")?;
+    // v1 reports "no limit" as a huge number.
+    (max < 1e18).then(|| {
+        (max - read_number("/sys/fs/cgroup/memory/memory.usage_in_bytes").unwrap_or(0.0)).max(0.0)
+    })
+}
+
+/// A soft resource limit of this process from /proc/self/limits, in bytes (None: unlimited or
+/// unknown).
+fn rlimit(name: &str) -> Option<f64> {
+    let text = std::fs::read_to_string("/proc/self/limits").ok()?;
+    let line = text.lines().find(|l| l.starts_with(name))?;
+    line[name.len()..].split_whitespace().next()?.parse().ok()
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn reads_kb_fields() {
+        let text = "MemTotal:       24000000 kB\nMemAvailable:    1000 kB\n";
+        assert_eq!(kb_field(text, "MemAvailable:"), Some(1000.0 * 1024.0));
+        assert_eq!(kb_field(text, "VmSize:"), None);
+    }
+
+    #[test]
+    fn available_memory_is_positive_on_linux() {
+        if cfg!(target_os = "linux") {
+            let m = available_memory().expect("Linux has /proc/meminfo");
+            assert!(m > 1e6, "{m}");
+        }
+    }
+}
