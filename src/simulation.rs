@@ -470,3 +470,41 @@ impl<const D: usize> Simulation<D> {
         })
     }
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// A step too small to advance the time (here: one particle's sound speed made absurd)
+    /// stops the run with the particle that sets it, instead of stepping forever.
+    #[test]
+    fn a_step_that_does_not_advance_time_stops_the_run() {
+        let deck = r#"
+[simulation]
+dimension = 2
+end_time = 2.0
+[materials.al]
+density = 2700.0
+eos = { type = "linear" }
+strength = { type = "elastic", youngs_modulus = 68.9e9, poissons_ratio = 0.33 }
+[[body]]
+name = "block"
+material = "al"
+spacing = 1.0e-3
+shape = { type = "rectangle", min = [0.0, 0.0], max = [5.0e-3, 5.0e-3] }
+"#;
+        let case = crate::deck::parse(deck, "stall.toml").unwrap();
+        let mut sim = Simulation::<2>::new(&case).unwrap();
+        sim.step(f64::INFINITY).unwrap();
+        sim.state.time = 1.0;
+        sim.particles.c[7] = 1e300;
+        let Err(Error::Unstable { cause, .. }) = sim.step(f64::INFINITY) else {
+            panic!("the run went on");
+        };
+        assert!(cause.contains("does not advance the time"), "{cause}");
+        assert!(
+            cause.contains(&format!("particle {}", sim.particles.id[7])),
+            "{cause}"
+        );
+    }
+}

@@ -394,3 +394,58 @@ fn two_d_specifics() {
     let (message, _) = deck_error(&deck, "symmetry[0].axis", 27);
     assert!(message.contains("2D"), "{message}");
 }
+
+/// Names become file names and history columns: a path, a separator or a quote is refused.
+#[test]
+fn unsafe_names_are_refused() {
+    for bad in [
+        "../escaped",
+        "/tmp/abs",
+        "a,b",
+        "say \"hi\"",
+        ".hidden",
+        "tab\there",
+    ] {
+        let toml_name = bad
+            .replace('\\', "\\\\")
+            .replace('"', "\\\"")
+            .replace('\t', "\\t");
+        let deck = edit("name = \"sphere\"", &format!("name = \"{toml_name}\""));
+        let (message, help) = deck_error(&deck, "body[0].name", 11);
+        assert!(message.contains("body name"), "{message}");
+        assert!(help.contains("ASCII letters"), "{help}");
+        let deck = edit(
+            "[simulation]\n",
+            &format!("[simulation]\nname = \"{toml_name}\"\n"),
+        );
+        deck_error(&deck, "simulation.name", 2);
+    }
+    // The file's stem stands in for a missing case name, made safe.
+    let case = parse(GOOD, "dir/my deck (v2).toml").unwrap();
+    assert_eq!(case.name, "my_deck__v2_");
+}
+
+/// A speed no impact of solids reaches (and at which the first step would vanish) is refused
+/// with its value.
+#[test]
+fn absurd_speed_is_refused() {
+    let deck = edit(
+        "velocity = [0.0, 0.0, -7000.0]",
+        "velocity = [0.0, 0.0, -1.0e300]",
+    );
+    let (message, _) = deck_error(&deck, "body[0].velocity", 14);
+    assert!(message.contains("1e300 m/s"), "{message}");
+}
+
+/// More snapshots than any run needs is refused with the count and a sensible interval.
+#[test]
+fn absurd_snapshot_interval_is_refused() {
+    for interval in ["1.0e-300", "1.0e-13"] {
+        let deck = format!("{GOOD}\n[output]\nsnapshot_interval = {interval}\n");
+        let (message, help) = deck_error(&deck, "output.snapshot_interval", 28);
+        assert!(message.contains("snapshots"), "{message}");
+        assert!(help.contains("2e-12 s"), "{help}");
+    }
+    let deck = format!("{GOOD}\n[output]\nsnapshot_interval = 1.0e-11\n");
+    assert!(parse(&deck, "ok.toml").is_ok());
+}

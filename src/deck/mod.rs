@@ -98,6 +98,11 @@ fn bytes(b: f64) -> String {
     }
 }
 
+/// Rounds to three significant digits (a figure that reads well).
+fn round_sig(x: f64) -> f64 {
+    format!("{x:.2e}").parse().unwrap_or(x)
+}
+
 /// Rounds up to two significant digits (a spacing that surely fits).
 fn round_up_2(x: f64) -> f64 {
     if x <= 0.0 || !x.is_finite() {
@@ -225,8 +230,18 @@ impl Ctx<'_> {
     /// A syntax, type or unknown-key error from `toml`.
     fn toml_error(&self, e: &toml::de::Error) -> Error {
         let span = e.span().unwrap_or(0..0);
-        let key = keypath::key_path_at(self.text, span.start);
-        let msg = e.message().trim();
+        let key = match keypath::key_path_at(self.text, span.start) {
+            k if k.is_empty() => "(top level)".to_string(),
+            k => k,
+        };
+        let msg = match e.message().trim() {
+            // toml says nothing when the text ends in the middle of a key-value pair.
+            "" if span.start >= self.text.trim_end().len() => {
+                "the deck ends here in the middle of an entry: a value or a closing bracket or quote is missing"
+            }
+            "" => "this is not valid TOML",
+            m => m,
+        };
         if let Some(rest) = msg.strip_prefix("unknown field `") {
             let (field, tail) = rest.split_once('`').unwrap_or((rest, ""));
             let expected = tail
@@ -609,7 +624,7 @@ impl Ctx<'_> {
                             "[0.0, 0.0, -7000.0]"
                         },
                     )?;
-                    let speed = velocity.iter().map(|c| c * c).sum::<f64>().sqrt();
+                    let speed = velocity.iter().fold(0.0_f64, |a, &c| a.hypot(c));
                     if speed >= MAX_SPEED {
                         return Err(self.fail(
                             v.span(),
@@ -1545,7 +1560,7 @@ impl Ctx<'_> {
         };
         let message = if limit_memory <= limit_count {
             format!(
-                "the case would need about {:.2e} particles ({:.2e} in body `{}`), about {} of memory, but this machine has {} available",
+                "the case would need about {:.2e} particles ({:.2e} in body `{}`), about {} of memory, but only {} is available to this process (free memory, less any cgroup or ulimit limit)",
                 total,
                 n_worst,
                 body.name,
@@ -1762,8 +1777,8 @@ impl Ctx<'_> {
                     ),
                     format!(
                         "use at least end_time / {MAX_SNAPSHOTS} = {} s; e.g. {} s gives 100 snapshots",
-                        num(end_time / MAX_SNAPSHOTS),
-                        num(end_time / 100.0)
+                        num(round_sig(end_time / MAX_SNAPSHOTS)),
+                        num(round_sig(end_time / 100.0))
                     ),
                 ));
             }

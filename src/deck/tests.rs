@@ -517,7 +517,7 @@ fn memory_check_names_the_largest_body_and_a_spacing_that_fits() {
     assert_eq!(key, "body[2].spacing");
     assert_eq!(location.line, 34);
     assert!(message.contains("particles"), "{message}");
-    assert!(message.contains("1.0 GiB available"), "{message}");
+    assert!(message.contains("only 1.0 GiB is available"), "{message}");
     let help = help.unwrap();
     assert!(help.contains("a spacing of at least"), "{help}");
     // The suggested spacing really fits.
