@@ -138,16 +138,39 @@ fn plan_lines(case: &Case, n: f64, dt: f64, w: &mut String, warnings: &mut Vec<S
     }
     let plan = output_plan(case, n as usize);
     let shown = plan.snapshots.min(steps as u64 + 1);
+    let volume = shown as f64 * plan.snapshot_bytes + 2.0 * plan.checkpoint_bytes;
     let _ = writeln!(
         w,
         "snapshots: {shown} of about {} each, {} in all with the checkpoint ({})",
         human_bytes(plan.snapshot_bytes),
-        human_bytes(shown as f64 * plan.snapshot_bytes + 2.0 * plan.checkpoint_bytes),
+        human_bytes(volume),
         match case.output.snapshot_interval {
             Some(i) => format!("every {i:e} s"),
             None => "first and last only".into(),
         }
     );
+    let default_out = std::path::Path::new("runs").join(&case.name);
+    if let Some(free) = default_out
+        .ancestors()
+        .find(|p| p.exists() || p.as_os_str().is_empty())
+        .and_then(|p| {
+            fs4::available_space(if p.as_os_str().is_empty() {
+                std::path::Path::new(".")
+            } else {
+                p
+            })
+            .ok()
+        })
+    {
+        if volume > free as f64 {
+            warnings.push(format!(
+                "the snapshots would take {}, more than the {} free on the disk holding {}: `run` refuses this; raise snapshot_interval or free disk space",
+                human_bytes(volume),
+                human_bytes(free as f64),
+                default_out.display()
+            ));
+        }
+    }
     if let Some(i) = case.output.snapshot_interval {
         if i < dt && plan.snapshots > steps as u64 + 1 {
             warnings.push(format!(
