@@ -340,7 +340,7 @@ fn check_dim<const D: usize>(case: &Case) -> Result<String> {
 pub fn summary_text(s: &Summary) -> String {
     format!(
         "{} ({}): {} particles, {} steps to t = {:.4e} s in {} ({:.3e} particle-steps/s, {:.3e} interactions/s, {} threads)\n\
-         energy error {:.3e}, momentum error {:.3e}, min inter-body distance {}",
+         energy error {:.3e}, momentum error {:.3e}, min inter-body distance {}{}",
         s.status,
         s.reason,
         s.particles,
@@ -352,7 +352,14 @@ pub fn summary_text(s: &Summary) -> String {
         s.threads,
         s.energy_error,
         s.momentum_error,
-        s.min_interbody_distance.map_or("— (no contact)".to_string(), |g| format!("{g:.3} Δp"))
+        s.min_interbody_distance.map_or("— (no contact)".to_string(), |g| format!("{g:.3} Δp")),
+        s.mixing
+            .iter()
+            .map(|m| format!(
+                "\n{} – {}: deepest penetration {:.3} Δp, at most {} particles mixed",
+                m.bodies[0], m.bodies[1], m.max_penetration, m.max_mixed
+            ))
+            .collect::<String>()
     )
 }
 

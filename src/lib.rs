@@ -20,6 +20,7 @@ pub mod integrate;
 pub mod kernel;
 pub mod machine;
 pub mod material;
+pub mod mixing;
 pub mod neighbors;
 pub mod output;
 pub mod particles;

@@ -94,6 +94,12 @@ impl Tally {
         if let Some(g) = d.min_interbody_distance {
             self.min_gap = Some(self.min_gap.map_or(g, |m: f64| m.min(g)));
         }
+        self.mixing
+            .resize(d.mixing.len(), crate::mixing::PairMixing::default());
+        for (m, x) in self.mixing.iter_mut().zip(&d.mixing) {
+            m.penetration = m.penetration.max(x.penetration);
+            m.mixed = m.mixed.max(x.mixed);
+        }
         self.interactions += d.interactions as u128;
         self.last = d.clone();
     }
@@ -316,11 +322,31 @@ impl<const D: usize> Run<'_, D> {
                     .max(tally.momentum_scale)
                     .max(f64::MIN_POSITIVE),
             min_interbody_distance: tally.min_gap,
+            mixing: pair_mixing(&self.sim.body_names, &tally.mixing),
             modelled_part: modelled_part(self.case),
             status: status.to_string(),
             reason,
         }
     }
+}
+
+/// The run's largest mixing figures, by body pair.
+fn pair_mixing(names: &[String], tally: &[crate::mixing::PairMixing]) -> Vec<crate::output::summary::PairMixing> {
+    let mut out = Vec::new();
+    for (a, na) in names.iter().enumerate() {
+        for (b, nb) in names.iter().enumerate().skip(a + 1) {
+            let m = tally
+                .get(crate::mixing::pair_index(names.len(), a, b))
+                .copied()
+                .unwrap_or_default();
+            out.push(crate::output::summary::PairMixing {
+                bodies: [na.clone(), nb.clone()],
+                max_penetration: m.penetration,
+                max_mixed: m.mixed,
+            });
+        }
+    }
+    out
 }
 
 /// The step limit for an output `remaining` seconds ahead, after a step of `dt_prev` (0 before

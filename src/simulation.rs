@@ -9,6 +9,7 @@ use crate::integrate;
 use crate::kernel::{CubicSpline, WendlandC2};
 use crate::neighbors::{NeighborList, Refresh};
 use crate::particles::{to3, Particles};
+use crate::mixing::{self, PairMixing};
 use crate::physics::{self, Model, Rates};
 use crate::setup;
 use rayon::prelude::*;
@@ -38,6 +39,8 @@ pub struct Diagnostics {
     pub min_interbody_distance: Option<f64>,
     /// Contact force on each body (N), z = 0 in 2D.
     pub body_contact_force: Vec<[f64; 3]>,
+    /// Mixing figures of each pair of bodies, in [`crate::mixing::pair_index`] order.
+    pub mixing: Vec<PairMixing>,
     /// Neighbour entries of the real particles this step (particle-neighbour interactions).
     pub interactions: usize,
 }
@@ -50,6 +53,8 @@ pub struct Simulation<const D: usize> {
     pub kernel: KernelKind,
     pub symmetry: Vec<Plane>,
     pub body_names: Vec<String>,
+    /// Lattice spacing of each body (m).
+    pub spacing: Vec<f64>,
     /// Time, step and the other scalars a checkpoint keeps.
     pub state: SimState,
     pub stats: SearchStats,
@@ -181,6 +186,7 @@ impl<const D: usize> Simulation<D> {
             kernel: case.simulation.kernel,
             symmetry: setup::symmetry_planes(case),
             body_names: case.bodies.iter().map(|b| b.name.clone()).collect(),
+            spacing: case.bodies.iter().map(|b| b.spacing).collect(),
             state: SimState {
                 time: 0.0,
                 step: 0,
@@ -279,6 +285,13 @@ impl<const D: usize> Simulation<D> {
                 physics::compute_rates(WendlandC2, p, &self.neighbors, &self.model, &mut self.rates)
             }
         }
+        let rates = &self.rates.particles;
+        let near = |i: usize| rates[i].min_interbody_gap.is_finite();
+        let (nl, spacing) = (&self.neighbors, &self.spacing);
+        let mixing = match self.kernel {
+            KernelKind::CubicSpline => mixing::mixing(CubicSpline, p, nl, near, spacing),
+            KernelKind::WendlandC2 => mixing::mixing(WendlandC2, p, nl, near, spacing),
+        };
         let n = p.n_real;
         // The stable step, its growth limited to 25 % a step; the collapse check uses it before
         // it is shortened to land on an output time. (min and max are exact in any order.)
@@ -335,6 +348,7 @@ impl<const D: usize> Simulation<D> {
             gravity: old.gravity,
             max_pressure: old.max_pressure,
             min_interbody_distance: old.gap.is_finite().then_some(old.gap),
+            mixing,
             ..Default::default()
         };
         for block in self.body_force_blocks.chunks_exact(bodies.max(1)) {

@@ -156,6 +156,7 @@ fn every_output_column_field_and_key_is_documented() {
         final_energy: 0.0,
         momentum_error: 0.0,
         min_interbody_distance: None,
+        mixing: Vec::new(),
         modelled_part: String::new(),
         status: String::new(),
         reason: String::new(),

@@ -30,6 +30,8 @@ pub struct Tally {
     pub momentum_dev: f64,
     pub momentum_scale: f64,
     pub min_gap: Option<f64>,
+    /// Largest mixing figures of each pair of bodies over the run.
+    pub mixing: Vec<crate::mixing::PairMixing>,
     pub interactions: u128,
     pub last: Diagnostics,
 }

@@ -18,8 +18,9 @@ pub struct HistoryWriter {
 impl HistoryWriter {
     /// Create the file and write the header. Columns: time, dt, kinetic_energy,
     /// internal_energy, contact_energy, gravity_energy, total_energy, momentum_x/y/z,
-    /// max_pressure, min_interbody_distance (/Δp_avg; empty with no contact pair in range), and
-    /// contact_force_<body>_x/y/z for each body.
+    /// max_pressure, min_interbody_distance (/Δp_avg; empty with no contact pair in range),
+    /// contact_force_<body>_x/y/z for each body, and penetration_<a>_<b> (Δp_avg) and
+    /// mixed_<a>_<b> for each pair of bodies (see `mixing`).
     pub fn create(path: &Path, body_names: &[String]) -> Result<Self> {
         let file = File::create(path).map_err(|e| Error::io(path, e))?;
         let mut w = HistoryWriter {
@@ -46,6 +47,12 @@ impl HistoryWriter {
         for name in body_names {
             for k in ["x", "y", "z"] {
                 header.push(format!("contact_force_{name}_{k}"));
+            }
+        }
+        for (a, na) in body_names.iter().enumerate() {
+            for nb in &body_names[a + 1..] {
+                header.push(format!("penetration_{na}_{nb}"));
+                header.push(format!("mixed_{na}_{nb}"));
             }
         }
         w.write_record(&header)?;
@@ -103,6 +110,10 @@ impl HistoryWriter {
         );
         for f in &d.body_contact_force {
             fields.extend(f.iter().map(|x| format!("{x:e}")));
+        }
+        for m in &d.mixing {
+            fields.push(format!("{:e}", m.penetration));
+            fields.push(m.mixed.to_string());
         }
         self.write_record(&fields)
     }
@@ -182,15 +193,17 @@ mod tests {
         let d = Diagnostics {
             time: 1.5,
             body_contact_force: vec![[1.0, 2.0, 3.0], [4.0, 5.0, 6.0]],
+            mixing: vec![crate::mixing::PairMixing { penetration: 0.5, mixed: 3 }],
             ..Default::default()
         };
         w.row(&d).unwrap();
         drop(w);
         let h = History::read(&path).unwrap();
-        assert_eq!(h.columns.len(), 12 + 6);
+        assert_eq!(h.columns.len(), 12 + 6 + 2);
         assert!(h.rows.iter().all(|r| r.len() == h.columns.len()));
         assert_eq!(h.column("contact_force_a,b_y").unwrap(), vec![2.0]);
         assert_eq!(h.column("contact_force_say \"hi\"_z").unwrap(), vec![6.0]);
+        assert_eq!(h.column("mixed_a,b_say \"hi\"").unwrap(), vec![3.0]);
         let _ = std::fs::remove_dir_all(&dir);
     }
 }

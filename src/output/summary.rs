@@ -35,6 +35,8 @@ pub struct Summary {
     /// Smallest distance between particles of different bodies over the run, / Δp_avg
     /// (None: bodies never came within the kernel support, or one body).
     pub min_interbody_distance: Option<f64>,
+    /// The mixing figures of each pair of bodies, their largest over the run (see `mixing`).
+    pub mixing: Vec<PairMixing>,
     /// Which part of the bodies the run models (symmetry planes), and so what the totals above
     /// and in `history.csv` are totals of.
     pub modelled_part: String,
@@ -44,6 +46,16 @@ pub struct Summary {
     pub status: String,
     /// The ending in words: for `unstable`, the particle, its body, place and cause.
     pub reason: String,
+}
+
+/// The no-mixing figures of one pair of bodies over a run.
+#[derive(Debug, Clone, Serialize, Deserialize, PartialEq)]
+pub struct PairMixing {
+    pub bodies: [String; 2],
+    /// Deepest penetration of a particle of one past the other's surface layer (Δp_avg).
+    pub max_penetration: f64,
+    /// Most particles whose neighbourhood was dominated by the other body at once.
+    pub max_mixed: u64,
 }
 
 impl Summary {
