@@ -74,6 +74,23 @@ impl Ghosts {
         })
     }
 
+    /// Extend per-particle `values` of the real particles to the ghosts, in ghost order: each
+    /// ghost gets its source's value passed through `mirror(value, axis)` for its plane's
+    /// axis (a vector changes the sign of that component; a scalar stays).
+    pub fn extend_to_ghosts_with<T: Copy>(
+        &self,
+        values: &mut Vec<T>,
+        planes: &[Plane],
+        mirror: impl Fn(T, usize) -> T,
+    ) {
+        for (plane, w) in planes.iter().zip(self.first.windows(2)) {
+            for &s in &self.sources[w[0]..w[1]] {
+                let v = values[s];
+                values.push(mirror(v, plane.axis));
+            }
+        }
+    }
+
     /// Refresh the ghosts from the current state of their sources (same ghosts, same order).
     pub fn update<const D: usize>(&self, p: &mut Particles<D>, planes: &[Plane]) {
         let n = p.n_real;

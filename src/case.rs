@@ -6,6 +6,8 @@
 //! keeps the [`Location`] of its definition so that later checks (two bodies overlapping, say) can
 //! still point at the deck's line.
 
+pub use crate::contact::ContactLaw;
+
 /// A place in a deck file, for error messages (1-based line and column).
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
 pub struct Location {
@@ -158,8 +160,10 @@ pub enum Shape {
 /// How two bodies meet.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub enum InteractionKind {
-    /// The paper's contact force, eq. (5); None: the default.
+    /// The contact force of eq. (5), in the colour form or as printed (`Paper`, with its K and
+    /// n; None: the defaults).
     Contact {
+        law: ContactLaw,
         stiffness: Option<f64>,
         exponent: Option<f64>,
     },

@@ -16,6 +16,13 @@
 //! - **mixed**: the number of particles with a positive penetration, i.e. lying past the other
 //!   body's surface layer.
 //!
+//! A particle counts only where both bodies are present as bodies: the other body fills a good
+//! part of its neighbourhood, c_b(x_i) ≥ ½ c_a(x_i) (its own body's colour, itself included;
+//! a particle that has passed the other's surface layer sees ≈ 0.6 c_a, one touching it from
+//! outside ≈ 0.27 c_a), and it is itself part of its body, c_a ≥ 0.45 (0.79 at a face, about
+//! 0.45 at the corner of a cube, 0.2–0.3 for a detached fragment). Fragments of a debris cloud
+//! may overtake each other — that is flow, not interdigitation.
+//!
 //! Both are zero for bodies that touch along a face, at a convex or a concave corner, and grow
 //! with the interleaving of two lattices. They are computed for the particles that have a
 //! neighbour of another body within the support (in contact or welded), from the state at t_n.
@@ -40,13 +47,17 @@ pub fn pair_index(n: usize, a: usize, b: usize) -> usize {
     a * (2 * n - a - 1) / 2 + (b - a - 1)
 }
 
+/// A particle with less of its own body around it than this is a fragment (see the module doc).
+const MIN_OWN_COLOUR: f64 = 0.45;
+
 /// The other bodies a particle meets: at most this many are told apart (more are rare).
 const OTHERS: usize = 4;
 
-/// One other body's colour gradient and mean spacing, seen from particle i.
+/// One other body's colour, its gradient and mean spacing, seen from particle i.
 #[derive(Clone, Copy)]
 struct Other<const D: usize> {
     body: u32,
+    colour: f64,
     grad: [f64; D],
     spacing: f64,
 }
@@ -95,28 +106,36 @@ fn particle<const D: usize, K: Kernel>(
     let bi = p.body[i];
     let within = |j: usize| (p.x[i] - p.x[j]).norm() < p.h[i] + p.h[j];
     let mut others: [Option<Other<D>>; OTHERS] = [None; OTHERS];
+    let mut own = p.m[i] / p.rho[i] * kernel.w::<D>(0.0, p.h[i]);
     for &j in list {
         let j = j as usize;
-        if p.body[j] == bi || !within(j) {
+        if !within(j) {
             continue;
         }
         let xij = p.x[i] - p.x[j];
         let r = xij.norm();
+        let hij = 0.5 * (p.h[i] + p.h[j]);
+        let vol = p.m[j] / p.rho[j];
+        if p.body[j] == bi {
+            own += vol * kernel.w::<D>(r, hij);
+            continue;
+        }
         let gf = if r > 0.0 {
-            kernel.dw::<D>(r, 0.5 * (p.h[i] + p.h[j])) / r
+            kernel.dw::<D>(r, hij) / r
         } else {
             0.0
         };
-        let vol = p.m[j] / p.rho[j];
         let slot = others
             .iter()
             .position(|o| o.is_none_or(|o| o.body == p.body[j]));
         if let Some(k) = slot {
             let o = others[k].get_or_insert(Other {
                 body: p.body[j],
+                colour: 0.0,
                 grad: [0.0; D],
                 spacing: 0.5 * (spacing[bi as usize] + spacing[p.body[j] as usize]),
             });
+            o.colour += vol * kernel.w::<D>(r, hij);
             for a in 0..D {
                 o.grad[a] += vol * gf * xij[a];
             }
@@ -143,7 +162,7 @@ fn particle<const D: usize, K: Kernel>(
             }
         }
         let k = pair_index(spacing.len(), bi as usize, o.body as usize);
-        if height > 0.0 {
+        if height > 0.0 && o.colour >= 0.5 * own && own >= MIN_OWN_COLOUR {
             acc[k].penetration = acc[k].penetration.max(height / o.spacing);
             acc[k].mixed += 1;
         }

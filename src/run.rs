@@ -331,7 +331,10 @@ impl<const D: usize> Run<'_, D> {
 }
 
 /// The run's largest mixing figures, by body pair.
-fn pair_mixing(names: &[String], tally: &[crate::mixing::PairMixing]) -> Vec<crate::output::summary::PairMixing> {
+fn pair_mixing(
+    names: &[String],
+    tally: &[crate::mixing::PairMixing],
+) -> Vec<crate::output::summary::PairMixing> {
     let mut out = Vec::new();
     for (a, na) in names.iter().enumerate() {
         for (b, nb) in names.iter().enumerate().skip(a + 1) {

@@ -4,12 +4,13 @@
 use crate::boundary;
 use crate::boundary::Plane;
 use crate::case::{Case, KernelKind};
+use crate::contact::colour::ColourState;
 use crate::error::{Error, Result};
 use crate::integrate;
 use crate::kernel::{CubicSpline, WendlandC2};
+use crate::mixing::{self, PairMixing};
 use crate::neighbors::{NeighborList, Refresh};
 use crate::particles::{to3, Particles};
-use crate::mixing::{self, PairMixing};
 use crate::physics::{self, Model, Rates};
 use crate::setup;
 use rayon::prelude::*;
@@ -66,6 +67,10 @@ pub struct Simulation<const D: usize> {
     sums_old: Vec<Sums>,
     sums_new: Vec<Sums>,
     body_force_blocks: Vec<[f64; 3]>,
+    /// The colour-law state of every particle, ghosts included (empty without such pairs).
+    colour: Vec<ColourState>,
+    /// Search radii max(h, h0): the colour law reaches 2 h0 also where h has shrunk.
+    h_search: Vec<f64>,
 }
 
 /// The scalar state of a run in progress, beside its particles: what a checkpoint keeps.
@@ -205,6 +210,8 @@ impl<const D: usize> Simulation<D> {
             sums_old: Vec::new(),
             sums_new: Vec::new(),
             body_force_blocks: Vec::new(),
+            colour: Vec::new(),
+            h_search: Vec::new(),
         })
     }
 
@@ -235,21 +242,23 @@ impl<const D: usize> Simulation<D> {
         // of the real particles with the old ghosts refreshed), and every REORDER_EVERY steps
         // at the latest, when the real particles are also put back in cell order.
         self.ghosts.update(p, &self.symmetry);
+        let wide = self.model.colour.is_some();
+        search_radii(p, wide, &mut self.h_search);
         let reorder = self.state.step >= self.state.last_reorder + REORDER_EVERY;
         let mut need = if reorder {
             Refresh::Full
         } else {
-            self.neighbors.refresh(&p.x, &p.h)
+            self.neighbors.refresh(&p.x, &self.h_search)
         };
         if need == Refresh::Partial {
             // Particles moved beyond the skin: the ghost layers must still reach 2 h_max.
-            let h_max = p.h.par_iter().copied().reduce(|| 0.0, f64::max);
+            let h_max = self.h_search.par_iter().copied().reduce(|| 0.0, f64::max);
             if !self.ghosts.cover(p, &self.symmetry, 2.0 * h_max) {
                 need = Refresh::Full;
             }
         }
         if need == Refresh::Partial {
-            self.neighbors.rebuild_dirty(&p.x, &p.h);
+            self.neighbors.rebuild_dirty(&p.x, &self.h_search);
             self.stats.partial_searches += 1;
         }
         if need == Refresh::Full {
@@ -267,22 +276,40 @@ impl<const D: usize> Simulation<D> {
                 p.permute(&self.order);
                 self.state.last_reorder = self.state.step;
             }
-            let h_max = p.h.iter().copied().fold(0.0_f64, f64::max);
+            search_radii(p, wide, &mut self.h_search);
+            let h_max = self.h_search.iter().copied().fold(0.0_f64, f64::max);
             let skin = SKIN * h_max;
             self.ghosts.rebuild(p, &self.symmetry, 2.0 * h_max + skin);
-            self.neighbors.build(&p.x, &p.h, p.n_real, skin);
+            search_radii(p, wide, &mut self.h_search);
+            self.neighbors.build(&p.x, &self.h_search, p.n_real, skin);
             self.stats.searches += 1;
         }
+        // The colour contact law needs every particle's colour state first.
+        self.colour.clear();
+        if self.model.colour.is_some() {
+            let (nl, model) = (&self.neighbors, &self.model);
+            match self.kernel {
+                KernelKind::CubicSpline => {
+                    physics::colour_states(CubicSpline, p, nl, model, &mut self.colour)
+                }
+                KernelKind::WendlandC2 => {
+                    physics::colour_states(WendlandC2, p, nl, model, &mut self.colour)
+                }
+            }
+            // A ghost's state is its source's, with the normal mirrored.
+            self.ghosts
+                .extend_to_ghosts_with(&mut self.colour, &self.symmetry, |mut s, axis| {
+                    s.normal[axis] = -s.normal[axis];
+                    s
+                });
+        }
+        let (nl, model, colour) = (&self.neighbors, &self.model, &self.colour);
         match self.kernel {
-            KernelKind::CubicSpline => physics::compute_rates(
-                CubicSpline,
-                p,
-                &self.neighbors,
-                &self.model,
-                &mut self.rates,
-            ),
+            KernelKind::CubicSpline => {
+                physics::compute_rates(CubicSpline, p, nl, model, colour, &mut self.rates)
+            }
             KernelKind::WendlandC2 => {
-                physics::compute_rates(WendlandC2, p, &self.neighbors, &self.model, &mut self.rates)
+                physics::compute_rates(WendlandC2, p, nl, model, colour, &mut self.rates)
             }
         }
         let rates = &self.rates.particles;
@@ -520,5 +547,16 @@ shape = { type = "rectangle", min = [0.0, 0.0], max = [5.0e-3, 5.0e-3] }
             cause.contains(&format!("particle {}", sim.particles.id[7])),
             "{cause}"
         );
+    }
+}
+
+/// The neighbour search radius of each particle (ghosts included): its smoothing length, or
+/// max(h, h0) when the colour contact law, which acts over the reference support, is in use.
+fn search_radii<const D: usize>(p: &Particles<D>, wide: bool, out: &mut Vec<f64>) {
+    out.clear();
+    if wide {
+        out.par_extend(p.h.par_iter().zip(&p.h0).map(|(&h, &h0)| h.max(h0)));
+    } else {
+        out.extend_from_slice(&p.h);
     }
 }

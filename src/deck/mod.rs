@@ -18,8 +18,9 @@ use std::ops::Range;
 use std::path::Path;
 
 use crate::case::{
-    BodySpec, Case, ColorBy, EosSpec, InteractionKind, InteractionSpec, KernelKind, Location,
-    MaterialSpec, Motion, OutputSpec, PictureSpec, Shape, Simulation, StrengthSpec, SymmetryPlane,
+    BodySpec, Case, ColorBy, ContactLaw, EosSpec, InteractionKind, InteractionSpec, KernelKind,
+    Location, MaterialSpec, Motion, OutputSpec, PictureSpec, Shape, Simulation, StrengthSpec,
+    SymmetryPlane,
 };
 use crate::error::{DeckLocation, Error, Result};
 pub use library::{library_material, library_names};
@@ -1656,19 +1657,49 @@ impl Ctx<'_> {
                 )?,
                 None => "contact",
             };
+            let paper_keys = [
+                ("stiffness", span_of(&r.stiffness)),
+                ("exponent", span_of(&r.exponent)),
+            ];
             let kind = if kind == "welded" {
                 self.forbid(
                     &prefix,
                     &[
-                        ("stiffness", span_of(&r.stiffness)),
-                        ("exponent", span_of(&r.exponent)),
+                        ("law", span_of(&r.law)),
+                        paper_keys[0].clone(),
+                        paper_keys[1].clone(),
                     ],
                     &["bodies", "type"],
                     "a welded interaction",
                 )?;
                 InteractionKind::Welded
             } else {
+                let law = match &r.law {
+                    Some(l) => match self.choice(
+                        l,
+                        &format!("{prefix}.law"),
+                        &["colour", "color", "paper"],
+                        "contact law",
+                    )? {
+                        "paper" => ContactLaw::Paper,
+                        _ => ContactLaw::Colour,
+                    },
+                    None => ContactLaw::Colour,
+                };
+                if law == ContactLaw::Colour {
+                    for (name, span) in &paper_keys {
+                        if let Some(span) = span {
+                            return Err(self.fail(
+                                span.clone(),
+                                format!("{prefix}.{name}"),
+                                format!("`{name}` belongs to the paper's law, but this contact uses the colour law (the default)"),
+                                format!("add `law = \"paper\"` to use eq. (5) as printed with this {name}, or remove it: the colour law takes its stiffness from the materials"),
+                            ));
+                        }
+                    }
+                }
                 InteractionKind::Contact {
+                    law,
                     stiffness: match &r.stiffness {
                         Some(k) => Some(self.positive(
                             k,

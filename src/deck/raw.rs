@@ -247,6 +247,7 @@ pub struct Interaction {
     pub bodies: Option<S<Vec<S<String>>>>,
     #[serde(rename = "type")]
     pub kind: Option<S<String>>,
+    pub law: Option<S<String>>,
     pub stiffness: Num,
     pub exponent: Num,
 }

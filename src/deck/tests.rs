@@ -46,6 +46,7 @@ shape = { type = "ring", center = [0, 0, 5e-3], inner_radius = 1e-3, outer_radiu
 [[interaction]]
 bodies = ["sphere", "plate"]
 type = "contact"
+law = "paper"
 stiffness = 1.0e11
 exponent = 4.0
 
@@ -214,6 +215,7 @@ fn full_3d_deck() {
     assert_eq!(
         case.interactions[0].kind,
         InteractionKind::Contact {
+            law: crate::case::ContactLaw::Paper,
             stiffness: Some(1.0e11),
             exponent: Some(4.0)
         }

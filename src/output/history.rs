@@ -193,7 +193,10 @@ mod tests {
         let d = Diagnostics {
             time: 1.5,
             body_contact_force: vec![[1.0, 2.0, 3.0], [4.0, 5.0, 6.0]],
-            mixing: vec![crate::mixing::PairMixing { penetration: 0.5, mixed: 3 }],
+            mixing: vec![crate::mixing::PairMixing {
+                penetration: 0.5,
+                mixed: 3,
+            }],
             ..Default::default()
         };
         w.row(&d).unwrap();

@@ -17,7 +17,8 @@
 pub mod artificial_stress;
 pub mod viscosity;
 
-use crate::contact::{self, ContactParams};
+use crate::contact::colour::{self, ColourLaw, ColourState};
+use crate::contact::{self, ContactLaw, ContactParams};
 use crate::kernel::Kernel;
 use crate::material::Material;
 use crate::neighbors::NeighborList;
@@ -62,6 +63,11 @@ impl PairTable {
     pub fn bodies(&self) -> usize {
         self.n
     }
+
+    /// Whether any pair of distinct bodies has a rule satisfying `f`.
+    pub fn any(&self, f: impl Fn(&PairRule) -> bool) -> bool {
+        (0..self.n).any(|a| (0..self.n).any(|b| a != b && f(&self.rules[a * self.n + b])))
+    }
 }
 
 /// Everything the equations need that is not particle state.
@@ -81,11 +87,46 @@ pub struct Model<const D: usize> {
     pub smoothing_ratio: f64,
     pub h_min_ratio: f64,
     pub h_max_ratio: f64,
+    /// The colour contact law's tables, where a pair of bodies uses it.
+    pub colour: Option<ColourLaw>,
 }
 
 impl<const D: usize> Model<D> {
     pub fn material_of(&self, body: u32) -> &Material {
         &self.materials[self.body_material[body as usize]]
+    }
+}
+
+/// How the bodies of a model meet, as the colour law asks.
+struct BodyPairs<'a, const D: usize>(&'a Model<D>);
+
+impl<const D: usize> colour::Meeting for BodyPairs<'_, D> {
+    fn colour(&self, a: u32, b: u32) -> bool {
+        matches!(self.0.pairs.rule(a, b), PairRule::Contact(c) if c.law == ContactLaw::Colour)
+    }
+
+    fn welded(&self, a: u32, b: u32) -> bool {
+        matches!(self.0.pairs.rule(a, b), PairRule::Conserve)
+    }
+
+    fn material(&self, b: u32) -> (usize, &Material) {
+        let k = self.0.body_material[b as usize];
+        (k, &self.0.materials[k])
+    }
+}
+
+/// The colour-law state of each real particle (see [`colour::states`]); nothing when no pair
+/// of bodies uses the colour law. Ghosts take their sources' (see `boundary`).
+pub fn colour_states<const D: usize, K: Kernel>(
+    kernel: K,
+    p: &Particles<D>,
+    nl: &NeighborList,
+    model: &Model<D>,
+    out: &mut Vec<ColourState>,
+) {
+    out.clear();
+    if let Some(law) = &model.colour {
+        colour::states(kernel, p, nl, &BodyPairs(model), law, out);
     }
 }
 
@@ -210,14 +251,18 @@ fn dot<const D: usize>(a: &[f64; D], b: &[f64; D]) -> f64 {
 }
 
 /// Evaluate all rates at the particles' current state (positions, velocities `p.v`, stress).
+///
+/// `colour` holds the colour-law state of every particle, ghosts included (see
+/// [`colour::states`]); it may be empty when no pair of bodies uses the colour law.
 pub fn compute_rates<const D: usize, K: Kernel>(
     kernel: K,
     p: &Particles<D>,
     nl: &NeighborList,
     model: &Model<D>,
+    colour: &[ColourState],
     out: &mut Rates<D>,
 ) {
-    compute_rates_on(kernel, p, nl, model, out, wide_lanes());
+    compute_rates_on(kernel, p, nl, model, colour, out, wide_lanes());
 }
 
 /// [`compute_rates`], on 256-bit vectors (`wide`, where [`wide_lanes`]) or portable code.
@@ -226,6 +271,7 @@ fn compute_rates_on<const D: usize, K: Kernel>(
     p: &Particles<D>,
     nl: &NeighborList,
     model: &Model<D>,
+    colour: &[ColourState],
     out: &mut Rates<D>,
     wide: bool,
 ) {
@@ -284,18 +330,26 @@ fn compute_rates_on<const D: usize, K: Kernel>(
                 (true, false) => {
                     // SAFETY: the CPU has AVX2 (asserted above).
                     unsafe {
-                        particle_rates_avx2::<D, K, false>(kernel, i, list, gather, art, model)
+                        particle_rates_avx2::<D, K, false>(
+                            kernel, i, list, gather, art, model, colour,
+                        )
                     }
                 }
                 #[cfg(target_arch = "x86_64")]
                 (true, true) => {
                     // SAFETY: as above.
                     unsafe {
-                        particle_rates_avx2::<D, K, true>(kernel, i, list, gather, art, model)
+                        particle_rates_avx2::<D, K, true>(
+                            kernel, i, list, gather, art, model, colour,
+                        )
                     }
                 }
-                (_, false) => particle_rates::<D, K, false>(kernel, i, list, gather, art, model),
-                (_, true) => particle_rates::<D, K, true>(kernel, i, list, gather, art, model),
+                (_, false) => {
+                    particle_rates::<D, K, false>(kernel, i, list, gather, art, model, colour)
+                }
+                (_, true) => {
+                    particle_rates::<D, K, true>(kernel, i, list, gather, art, model, colour)
+                }
             }
         }));
 }
@@ -324,8 +378,9 @@ fn particle_rates_avx2<const D: usize, K: Kernel, const ART: bool>(
     gather: &[Gather<D>],
     art: &[Tensor<D>],
     model: &Model<D>,
+    colour: &[ColourState],
 ) -> ParticleRates<D> {
-    particle_rates::<D, K, ART>(kernel, i, neighbors, gather, art, model)
+    particle_rates::<D, K, ART>(kernel, i, neighbors, gather, art, model, colour)
 }
 
 /// The conservation sums of one particle, one accumulator per lane (added up in lane order at
@@ -378,6 +433,7 @@ fn particle_rates<const D: usize, K: Kernel, const ART: bool>(
     gather: &[Gather<D>],
     art: &[Tensor<D>],
     model: &Model<D>,
+    colour: &[ColourState],
 ) -> ParticleRates<D> {
     let gi = &gather[i];
     let (xi, hi, bi) = (gi.x, gi.h, gi.body);
@@ -400,25 +456,62 @@ fn particle_rates<const D: usize, K: Kernel, const ART: bool>(
         let support = hi + gj.h;
         let inside = r2 < support * support && r2 > 0.0;
         if gj.body != bi {
-            if !inside {
+            let rule = model.pairs.rule(bi, gj.body);
+            if inside {
+                gap = gap.min(r2.sqrt() / (0.5 * (gi.dp + gj.dp)));
+            }
+            if let PairRule::Contact(params) = rule {
+                let vij: [f64; D] = std::array::from_fn(|k| gi.v[k] - gj.v[k]);
+                match params.law {
+                    ContactLaw::Paper => {
+                        if !inside {
+                            continue;
+                        }
+                        let r = r2.sqrt();
+                        let hij = 0.5 * support;
+                        let gf = kernel.grad_factor::<D>(r, hij);
+                        let (coef, pot, k) =
+                            contact::pair::<D, K>(kernel, params, gi.vol, gj.vol, r, hij, gf * r);
+                        for a in 0..D {
+                            fc[a] += xij[a] * gf * coef;
+                        }
+                        phi += 0.5 * pot;
+                        k_contact += k;
+                    }
+                    ContactLaw::Colour => {
+                        // The colour law acts over the reference support 2 h0_ij.
+                        let h0 = 0.5 * model.smoothing_ratio * (gi.dp + gj.dp);
+                        if r2 >= 4.0 * h0 * h0 || r2 == 0.0 {
+                            continue;
+                        }
+                        let r = r2.sqrt();
+                        let vol0 = (
+                            gi.m / model.material_of(bi).rho0,
+                            gj.m / model.material_of(gj.body).rho0,
+                        );
+                        let (f, k) = colour::pair::<D, K>(
+                            kernel,
+                            &colour[i],
+                            &colour[j as usize],
+                            &xij,
+                            r,
+                            vol0,
+                            h0,
+                        );
+                        for a in 0..D {
+                            fc[a] += f[a];
+                        }
+                        k_contact += k;
+                    }
+                }
+                count += inside as u32;
+                // Bodies closing on each other bound the step like any neighbour (below).
+                if inside {
+                    v2_contact = v2_contact.max(dot(&vij, &vij));
+                }
                 continue;
             }
-            let r = r2.sqrt();
-            gap = gap.min(r / (0.5 * (gi.dp + gj.dp)));
-            if let PairRule::Contact(params) = model.pairs.rule(bi, gj.body) {
-                count += 1;
-                let hij = 0.5 * support;
-                let gf = kernel.grad_factor::<D>(r, hij);
-                let (coef, pot, k) =
-                    contact::pair::<D, K>(kernel, params, gi.vol, gj.vol, r, hij, gf * r);
-                for a in 0..D {
-                    fc[a] += xij[a] * gf * coef;
-                }
-                phi += 0.5 * pot;
-                k_contact += k;
-                // Bodies closing on each other bound the step like any neighbour (below).
-                let vij: [f64; D] = std::array::from_fn(|k| gi.v[k] - gj.v[k]);
-                v2_contact = v2_contact.max(dot(&vij, &vij));
+            if !inside {
                 continue;
             }
         }
@@ -439,6 +532,11 @@ fn particle_rates<const D: usize, K: Kernel, const ART: bool>(
         conserve_chunk::<D, K, ART>(kernel, i, chunk, gather, art, model, &mut sums);
     }
 
+    if let Some(own) = colour.get(i) {
+        phi += own.energy;
+        k_contact +=
+            own.curvature * (gi.m / model.material_of(bi).rho0) * own.grad_sum * own.grad_sum;
+    }
     let mi = gi.m;
     let ci = gi.c;
     let (alpha, beta) = (model.alpha, model.beta);
@@ -582,12 +680,12 @@ shape = { type = "box", min = [-0.005, 0.0, 0.0], max = [0.0, 0.005, 0.005] }
 name = "b"
 material = "al"
 spacing = 1.0e-3
-shape = { type = "box", min = [0.001, 0.0, 0.0], max = [0.006, 0.005, 0.005] }
+shape = { type = "box", min = [0.0, 0.0, 0.0], max = [0.006, 0.005, 0.005] }
 [[body]]
 name = "c"
 material = "al"
 spacing = 1.0e-3
-shape = { type = "box", min = [0.001, 0.006, 0.0], max = [0.006, 0.011, 0.005] }
+shape = { type = "box", min = [0.0, 0.006, 0.0], max = [0.006, 0.011, 0.005] }
 [[interaction]]
 bodies = ["b", "c"]
 type = "welded"
@@ -616,8 +714,14 @@ type = "welded"
         let mut nl = NeighborList::default();
         nl.build(&p.x, &p.h, p.n_real, 0.1 * p.h[0]);
         let (mut wide, mut portable) = (Rates::default(), Rates::default());
-        compute_rates_on(CubicSpline, &p, &nl, &model, &mut wide, true);
-        compute_rates_on(CubicSpline, &p, &nl, &model, &mut portable, false);
+        let mut states = Vec::new();
+        colour_states(CubicSpline, &p, &nl, &model, &mut states);
+        assert!(
+            states.iter().any(|s| s.coef > 0.0),
+            "the colour law is at work"
+        );
+        compute_rates_on(CubicSpline, &p, &nl, &model, &states, &mut wide, true);
+        compute_rates_on(CubicSpline, &p, &nl, &model, &states, &mut portable, false);
         assert!(wide.particles.iter().any(|r| r.contact_force.norm() > 0.0));
         assert!(wide
             .particles
@@ -657,6 +761,7 @@ shape = { type = "rectangle", min = [1.5e-3, 0.0], max = [2.5e-3, 1.0e-3] }
 [[interaction]]
 bodies = ["a", "b"]
 type = "contact"
+law = "paper"
 stiffness = 1.0
 "#;
         let case = crate::deck::parse(deck, "closing.toml").unwrap();
@@ -665,7 +770,7 @@ stiffness = 1.0
         let mut nl = NeighborList::default();
         nl.build(&p.x, &p.h, p.n_real, 0.0);
         let mut rates = Rates::default();
-        compute_rates(CubicSpline, &p, &nl, &model, &mut rates);
+        compute_rates(CubicSpline, &p, &nl, &model, &[], &mut rates);
         let c = p.c[0];
         let expect = model.cfl * p.h[0] / (c + 1000.0 + 0.6 * model.alpha * c);
         assert!(rates.particles[0].neighbors == 1);

@@ -3,7 +3,8 @@
 pub mod shapes;
 
 use crate::boundary::Plane;
-use crate::case::{BodySpec, Case, EosSpec, InteractionKind, KernelKind, Motion};
+use crate::case::{BodySpec, Case, ContactLaw, EosSpec, InteractionKind, KernelKind, Motion};
+use crate::contact::colour::ColourLaw;
 use crate::contact::{self, ContactParams};
 use crate::error::{DeckLocation, Error, Result};
 use crate::kernel::{CubicSpline, WendlandC2};
@@ -68,7 +69,19 @@ pub fn build<const D: usize>(case: &Case) -> Result<(Particles<D>, Model<D>)> {
         smoothing_ratio: s.smoothing_ratio,
         h_min_ratio: s.h_min_ratio,
         h_max_ratio: s.h_max_ratio,
+        colour: None,
     };
+    let mut model = model;
+    if model
+        .pairs
+        .any(|r| matches!(r, PairRule::Contact(c) if c.law == ContactLaw::Colour))
+    {
+        let ratio = s.smoothing_ratio;
+        model.colour = Some(match s.kernel {
+            KernelKind::CubicSpline => ColourLaw::new::<D, _>(CubicSpline, ratio, &model.materials),
+            KernelKind::WendlandC2 => ColourLaw::new::<D, _>(WendlandC2, ratio, &model.materials),
+        });
+    }
     Ok((p, model))
 }
 
@@ -109,14 +122,24 @@ fn pair_rule<const D: usize>(case: &Case, materials: &[Material], a: usize, b: u
         .interactions
         .iter()
         .find(|s| s.bodies == [a, b] || s.bodies == [b, a]);
-    let (stiffness, exponent) = match spec.map(|s| s.kind) {
+    let (law, stiffness, exponent) = match spec.map(|s| s.kind) {
         Some(InteractionKind::Welded) => return PairRule::Conserve,
         Some(InteractionKind::Contact {
+            law,
             stiffness,
             exponent,
-        }) => (stiffness, exponent),
-        None => (None, None),
+        }) => (law, stiffness, exponent),
+        None => (ContactLaw::Colour, None, None),
     };
+    let spacing = 0.5 * (case.bodies[a].spacing + case.bodies[b].spacing);
+    if law == ContactLaw::Colour {
+        return PairRule::Contact(ContactParams {
+            law,
+            stiffness: 0.0,
+            exponent: 0.0,
+            spacing,
+        });
+    }
     let n = exponent.unwrap_or(DEFAULT_EXPONENT);
     let k = stiffness.unwrap_or_else(|| {
         let p = expected_contact_pressure(case, materials, a, b);
@@ -127,9 +150,10 @@ fn pair_rule<const D: usize>(case: &Case, materials: &[Material], a: usize, b: u
         }
     });
     PairRule::Contact(ContactParams {
+        law,
         stiffness: k,
         exponent: n,
-        spacing: 0.5 * (case.bodies[a].spacing + case.bodies[b].spacing),
+        spacing,
     })
 }
 

@@ -36,14 +36,27 @@
 //! ∓13.7 m/s instead of ∓10; see the separation test in tests/verification_contact.rs) and a
 //! finer lattice is needed.
 
+pub mod colour;
+
 use crate::kernel::Kernel;
+
+/// Which form of eq. (5) a pair of bodies meets through.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum ContactLaw {
+    /// The colour form (the default, see [`colour`]).
+    Colour,
+    /// Eq. (5) as printed: pairwise (W_ij/W(Δp))^n over the support 2h, along the line of
+    /// centres, K from the expected interface pressure.
+    Paper,
+}
 
 /// Contact settings of a body pair.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct ContactParams {
-    /// Stiffness K (Pa).
+    pub law: ContactLaw,
+    /// Paper law: stiffness K (Pa).
     pub stiffness: f64,
-    /// Exponent n.
+    /// Paper law: exponent n.
     pub exponent: f64,
     /// Mean initial particle spacing Δp_avg of the two bodies (m).
     pub spacing: f64,
@@ -153,6 +166,7 @@ mod tests {
     #[test]
     fn force_is_minus_the_potential_gradient_and_repulsive() {
         let p = ContactParams {
+            law: ContactLaw::Paper,
             stiffness: 2e9,
             exponent: 4.0,
             spacing: 1.0,

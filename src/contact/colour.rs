@@ -1,0 +1,348 @@
+//! The colour form of eq. (5): the contact potential of a particle is a function of the *other*
+//! body's colour at it, c_i = Σ_{j∈C_i} V_j W_ij — the paper's φ(x_i) = Σ_j V_j K (W_ij/W0)^n
+//! with the power taken of the sum rather than of each term — offset so that it vanishes for
+//! bodies that merely touch, and sized by the material's own stiffness. See the module doc of
+//! [`crate::contact`] for why; here are the pieces:
+//!
+//! - **Strain.** For a particle facing a flat lattice of the other body, the colour is a
+//!   monotone function c(d) of the gap d to the facing layer ([`LatticeColour`], a lattice sum
+//!   for the dimension, kernel and h/Δp in use). Its inverse reads a colour as the interface
+//!   strain ε = 1 − d/Δp: 0 for bodies touching at the natural spacing Δp (c = c0), positive
+//!   when they are pressed together. The colour is taken with each neighbour's reference volume
+//!   m/ρ0 and the reference smoothing length h0, so that it measures geometry only and the
+//!   potential is a function of the positions alone (energy is conserved).
+//! - **Potential.** Φ_i = ½ V0_i Σ_u(ε_i), with Σ_u(ε) = ∫₀^ε σ_u the work of the material's
+//!   uniaxial-strain compression curve σ_u(ε) = p(ρ0/(1 − ε), e = 0) + min(4G/3 ε, 2Y0/3)
+//!   ([`UniaxialCurve`]). Two facing layers pressed to a strain ε then carry the traction
+//!   σ_u(ε), as a layer of the material itself would: the contact is as stiff as the bodies, at
+//!   any pressure (hypervelocity shocks included), and follows the load the contact carries.
+//! - **Force.** −∇Φ pairs up as f_c,i = −Σ_j V0_i V0_j (P_i + P_j) ∇_i W_ij (h0), with
+//!   P = ½ σ_u(ε) dε/dc: eq. (5)'s shape with the pair factor K n (W_ij/W0)^(n−1) replaced by
+//!   the two particles' colour derivatives. Each pair's force is applied along the contact
+//!   normal n̂_ij (the two bodies' own outward normals, [`normal`]), never pulling: lattice
+//!   corrugation then pushes no particle sideways (no friction, no sliding into the gaps of
+//!   the other lattice).
+
+use crate::kernel::Kernel;
+use crate::material::Material;
+use crate::neighbors::NeighborList;
+use crate::particles::Particles;
+use rayon::prelude::*;
+
+/// The colour of a flat square (2D) or simple-cubic (3D) lattice of spacing Δp seen by a
+/// particle whose facing layer is d away (head-on), tabulated for d ∈ [D_MIN, 1] Δp and read
+/// backwards as the strain ε = 1 − d/Δp.
+#[derive(Debug, Clone, PartialEq)]
+pub struct LatticeColour {
+    /// Colours, increasing (d decreasing), and the strains they mean.
+    colour: Vec<f64>,
+    strain: Vec<f64>,
+}
+
+/// The table's smallest gap (Δp): beyond it the strain is extrapolated.
+const D_MIN: f64 = 0.05;
+const TABLE: usize = 400;
+
+impl LatticeColour {
+    pub fn new<const D: usize, K: Kernel>(kernel: K, smoothing_ratio: f64) -> Self {
+        let h = smoothing_ratio;
+        let reach = (2.0 * h).ceil() as i64 + 1;
+        let lateral = if D == 3 { reach } else { 0 };
+        let colour_at = |d: f64| {
+            let mut c = 0.0;
+            for a in 0..=reach {
+                let z = d + a as f64;
+                for k in -reach..=reach {
+                    for l in -lateral..=lateral {
+                        let r = ((k * k + l * l) as f64 + z * z).sqrt();
+                        c += kernel.w::<D>(r, h);
+                    }
+                }
+            }
+            c
+        };
+        let (mut colour, mut strain) = (Vec::new(), Vec::new());
+        for k in 0..=TABLE {
+            let d = 1.0 - (1.0 - D_MIN) * k as f64 / TABLE as f64;
+            colour.push(colour_at(d));
+            strain.push(1.0 - d);
+        }
+        LatticeColour { colour, strain }
+    }
+
+    /// c0: the colour of touching at the natural spacing, where the potential starts.
+    pub fn touching(&self) -> f64 {
+        self.colour[0]
+    }
+
+    /// (ε, dε/dc) for a colour c ≥ c0.
+    pub fn strain(&self, c: f64) -> (f64, f64) {
+        let n = self.colour.len();
+        let k = self.colour.partition_point(|&x| x <= c).clamp(1, n - 1);
+        let (c0, c1) = (self.colour[k - 1], self.colour[k]);
+        let (e0, e1) = (self.strain[k - 1], self.strain[k]);
+        let slope = (e1 - e0) / (c1 - c0);
+        (e0 + (c - c0) * slope, slope)
+    }
+}
+
+/// A material's uniaxial-strain compression curve at zero internal energy, and its work.
+#[derive(Debug, Clone, PartialEq)]
+pub struct UniaxialCurve {
+    /// Σ_u at ε = k ΔE, k = 0..=N.
+    work: Vec<f64>,
+    /// σ_u and dσ_u/dε at the table's end, for ε beyond it.
+    end: (f64, f64),
+}
+
+/// The table step and end: beyond CAP the curve continues with its slope there (compression
+/// beyond 60 % is far past any Hugoniot state of a solid).
+const DE: f64 = 1e-3;
+const CAP: f64 = 0.6;
+
+impl UniaxialCurve {
+    pub fn new(m: &Material) -> Self {
+        let n = (CAP / DE).round() as usize;
+        let mut work = vec![0.0];
+        for k in 0..n {
+            // Simpson's rule over each step.
+            let (a, b) = (k as f64 * DE, (k + 1) as f64 * DE);
+            let s = (stress(m, a) + 4.0 * stress(m, 0.5 * (a + b)) + stress(m, b)) * DE / 6.0;
+            work.push(work[k] + s);
+        }
+        let d = 1e-6;
+        let end = (stress(m, CAP), (stress(m, CAP) - stress(m, CAP - d)) / d);
+        UniaxialCurve { work, end }
+    }
+
+    /// (σ_u(ε), dσ_u/dε, Σ_u(ε)) for ε ≥ 0, with `m` the material the curve was made for.
+    pub fn at(&self, m: &Material, eps: f64) -> (f64, f64, f64) {
+        if eps >= CAP {
+            let x = eps - CAP;
+            let (s, ds) = self.end;
+            let w = self.work[self.work.len() - 1] + s * x + 0.5 * ds * x * x;
+            return (s + ds * x, ds, w);
+        }
+        let s = stress(m, eps);
+        let d = 1e-7;
+        let ds = (stress(m, eps + d) - s) / d;
+        let k = (eps / DE).floor() as usize;
+        let e0 = k as f64 * DE;
+        // Trapezoid from the tabulated point (second order in the step).
+        let w = self.work[k] + 0.5 * (stress(m, e0) + s) * (eps - e0);
+        (s, ds, w)
+    }
+}
+
+/// σ_u(ε) = p(ρ0/(1 − ε), 0) + min(4G/3 ε, 2Y0/3): the stress of a uniaxial compression ε.
+pub fn stress(m: &Material, eps: f64) -> f64 {
+    let p = m.pressure(m.rho0 / (1.0 - eps), 0.0).max(0.0);
+    let g = m.strength.shear_modulus();
+    let y = m.strength.yield_stress(0.0);
+    p + (4.0 / 3.0 * g * eps).min(2.0 / 3.0 * y)
+}
+
+/// The colour law of a case: the lattice table and each material's curve.
+#[derive(Debug, Clone, PartialEq)]
+pub struct ColourLaw {
+    pub lattice: LatticeColour,
+    /// Indexed like the case's materials.
+    pub curves: Vec<UniaxialCurve>,
+}
+
+impl ColourLaw {
+    pub fn new<const D: usize, K: Kernel>(
+        kernel: K,
+        smoothing_ratio: f64,
+        materials: &[Material],
+    ) -> Self {
+        ColourLaw {
+            lattice: LatticeColour::new::<D, K>(kernel, smoothing_ratio),
+            curves: materials.iter().map(UniaxialCurve::new).collect(),
+        }
+    }
+}
+
+/// What the pass needs of a particle that meets another body through the colour law.
+#[derive(Debug, Clone, Copy, Default, PartialEq)]
+pub struct ColourState {
+    /// P = ½ σ_u(ε) dε/dc (Pa): the particle's share of each pair coefficient.
+    pub coef: f64,
+    /// ½ dσ_u/dε (dε/dc)² (Pa), for the time step.
+    pub curvature: f64,
+    /// Its potential Φ_i = ½ V0 Σ_u(ε) (J).
+    pub energy: f64,
+    /// Σ_j V0_j |∇_i W_ij| over its contact neighbours (1/m), for the time step.
+    pub grad_sum: f64,
+    /// Outward normal of its own body (welded bodies included), −Σ_k V0_k ∇_i W_ik over its own
+    /// neighbours, unnormalised (≈ 1/h at a face, ≈ 0 inside).
+    pub normal: [f64; 3],
+    /// Whether it has a contact neighbour within the support.
+    pub near: bool,
+}
+
+/// How two bodies meet, as the colour states need it.
+pub trait Meeting: Sync {
+    /// Whether bodies a ≠ b meet through the colour law.
+    fn colour(&self, a: u32, b: u32) -> bool;
+    /// Whether bodies a ≠ b are welded (one body for the normal).
+    fn welded(&self, a: u32, b: u32) -> bool;
+    /// The material of body b.
+    fn material(&self, b: u32) -> (usize, &Material);
+}
+
+/// The colour state of every real particle (`out[i]`), from its neighbours within the support.
+pub fn states<const D: usize, K: Kernel>(
+    kernel: K,
+    p: &Particles<D>,
+    nl: &NeighborList,
+    meeting: &impl Meeting,
+    law: &ColourLaw,
+    out: &mut Vec<ColourState>,
+) {
+    let c0 = law.lattice.touching();
+    out.clear();
+    out.par_extend((0..p.n_real).into_par_iter().map(|i| {
+        let bi = p.body[i];
+        // Most particles have no neighbour of another body: a scan of the bodies tells.
+        let list = &nl.lists[i];
+        if list.iter().all(|&j| p.body[j as usize] == bi) {
+            return ColourState::default();
+        }
+        let (mut c, mut g) = (0.0, 0.0);
+        let mut own = [0.0; 3];
+        let mut near = false;
+        for &j in list {
+            let j = j as usize;
+            let bj = p.body[j];
+            let r = (p.x[i] - p.x[j]).norm();
+            if r >= p.h[i] + p.h[j] {
+                continue;
+            }
+            let same = bj == bi || meeting.welded(bi, bj);
+            if !same && !meeting.colour(bi, bj) {
+                continue;
+            }
+            let h0 = 0.5 * (p.h0[i] + p.h0[j]);
+            let vol0 = p.m[j] / meeting.material(bj).1.rho0;
+            let dw = kernel.dw::<D>(r, h0);
+            if same {
+                if r > 0.0 {
+                    for (a, o) in own.iter_mut().enumerate().take(D) {
+                        *o -= vol0 * dw * (p.x[i][a] - p.x[j][a]) / r;
+                    }
+                }
+            } else {
+                near = true;
+                c += vol0 * kernel.w::<D>(r, h0);
+                g += vol0 * dw.abs();
+            }
+        }
+        if !near {
+            return ColourState::default();
+        }
+        let mut s = ColourState {
+            grad_sum: g,
+            normal: own,
+            near,
+            ..Default::default()
+        };
+        if c > c0 {
+            let (eps, deps) = law.lattice.strain(c);
+            let (k, mat) = meeting.material(bi);
+            let (sigma, stiff, work) = law.curves[k].at(mat, eps.max(0.0));
+            let vol0 = p.m[i] / mat.rho0;
+            s.coef = 0.5 * sigma * deps;
+            s.curvature = 0.5 * stiff * deps * deps;
+            s.energy = 0.5 * vol0 * work;
+        }
+        s
+    }));
+}
+
+/// The contact normal of a pair (i of body A, j of body B), pointing from A into B: the
+/// difference of the two bodies' own outward normals, antisymmetric in i and j, or the line
+/// of centres where both are negligible (two particles deep inside their bodies). `h` scales
+/// the normals to numbers of order one; `xij` = x_i − x_j, `r` = |xij|.
+#[inline(always)]
+pub fn normal<const D: usize>(
+    si: &ColourState,
+    sj: &ColourState,
+    xij: &[f64; D],
+    r: f64,
+    h: f64,
+) -> [f64; D] {
+    let d: [f64; D] = std::array::from_fn(|a| (si.normal[a] - sj.normal[a]) * h);
+    let n2: f64 = d.iter().map(|x| x * x).sum();
+    if n2 > 1e-6 {
+        let n = n2.sqrt();
+        std::array::from_fn(|a| d[a] / n)
+    } else {
+        std::array::from_fn(|a| -xij[a] / r)
+    }
+}
+
+/// The share of the tangential part of each pair's force that the colour law keeps (see the
+/// module doc).
+pub const TANGENTIAL: f64 = 0.3;
+
+/// The colour-law force on i from its contact neighbour j (i of body A, j of body B) at
+/// distance r, with xij = x_i − x_j, reference volumes `vol0` and reference h0 = h0_ij: the
+/// pair's part of −∇Φ, taken along the contact normal and never pulling; and the pair's
+/// stiffness for the time step.
+#[inline(never)]
+pub fn pair<const D: usize, K: Kernel>(
+    kernel: K,
+    si: &ColourState,
+    sj: &ColourState,
+    xij: &[f64; D],
+    r: f64,
+    vol0: (f64, f64),
+    h0: f64,
+) -> ([f64; D], f64) {
+    let coef = si.coef + sj.coef;
+    if coef <= 0.0 {
+        return ([0.0; D], 0.0);
+    }
+    let n = normal(si, sj, xij, r, h0);
+    let dw = kernel.dw::<D>(r, h0);
+    // −V0_i V0_j (P_i + P_j) ∇_i W_ij is a repulsion of this magnitude along x̂_ij …
+    let radial = -vol0.0 * vol0.1 * coef * dw;
+    // … whose part along the normal pushes i back into its body (n̂ points from A into B).
+    let along: f64 = -(0..D).map(|a| xij[a] * n[a]).sum::<f64>() / r;
+    let push = radial * along.max(0.0);
+    // The normal part in full, the tangential part (lattice corrugation) damped to TANGENTIAL.
+    let force = std::array::from_fn(|a| {
+        let tangential = radial * (xij[a] / r + along * n[a]);
+        -push * n[a] + TANGENTIAL * tangential
+    });
+    let stiffness = vol0.0 * vol0.1 * coef * kernel.d2w::<D>(r, h0).abs()
+        + sj.curvature * vol0.1 * vol0.0 * vol0.0 * dw * dw;
+    (force, stiffness)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::kernel::CubicSpline;
+
+    /// The table reads colours back as the strains they were made for, and the touching
+    /// colour is that of a particle one spacing from a flat lattice (≈ 0.21 for the cubic
+    /// spline at h = 1.2 Δp in 2D and 3D).
+    #[test]
+    fn lattice_colour_inverts_to_the_gap() {
+        for (lat, d3) in [
+            (LatticeColour::new::<2, _>(CubicSpline, 1.2), false),
+            (LatticeColour::new::<3, _>(CubicSpline, 1.2), true),
+        ] {
+            let c0 = lat.touching();
+            assert!((0.19..0.23).contains(&c0), "3D {d3}: c0 = {c0}");
+            for k in [0, 37, 150, 399] {
+                let (e, slope) = lat.strain(lat.colour[k]);
+                assert!((e - lat.strain[k]).abs() < 1e-12, "{e}");
+                assert!(slope > 0.0);
+            }
+            assert!(lat.colour.windows(2).all(|w| w[1] > w[0]), "monotone");
+        }
+    }
+}
