@@ -512,6 +512,17 @@ impl<const D: usize> Simulation<D> {
     }
 }
 
+/// The neighbour search radius of each particle (ghosts included): its smoothing length, or
+/// max(h, h0) when the colour contact law, which acts over the reference support, is in use.
+fn search_radii<const D: usize>(p: &Particles<D>, wide: bool, out: &mut Vec<f64>) {
+    out.clear();
+    if wide {
+        out.par_extend(p.h.par_iter().zip(&p.h0).map(|(&h, &h0)| h.max(h0)));
+    } else {
+        out.extend_from_slice(&p.h);
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -547,16 +558,5 @@ shape = { type = "rectangle", min = [0.0, 0.0], max = [5.0e-3, 5.0e-3] }
             cause.contains(&format!("particle {}", sim.particles.id[7])),
             "{cause}"
         );
-    }
-}
-
-/// The neighbour search radius of each particle (ghosts included): its smoothing length, or
-/// max(h, h0) when the colour contact law, which acts over the reference support, is in use.
-fn search_radii<const D: usize>(p: &Particles<D>, wide: bool, out: &mut Vec<f64>) {
-    out.clear();
-    if wide {
-        out.par_extend(p.h.par_iter().zip(&p.h0).map(|(&h, &h0)| h.max(h0)));
-    } else {
-        out.extend_from_slice(&p.h);
     }
 }

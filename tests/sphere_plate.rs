@@ -42,6 +42,12 @@ fn coarse_sphere_plate_impact() {
         .iter()
         .filter_map(|d| d.min_interbody_distance)
         .fold(f64::INFINITY, f64::min);
+    let (penetration, mixed) = hist
+        .iter()
+        .flat_map(|d| d.mixing.iter())
+        .fold((0.0_f64, 0), |(p, m), x| {
+            (p.max(x.penetration), m.max(x.mixed))
+        });
 
     let p = &sim.particles;
     let n = p.n_real;
@@ -60,11 +66,18 @@ fn coarse_sphere_plate_impact() {
     println!(
         "sphere-plate Δp = {dp:e} m, {n} particles, {} steps: energy error {energy_error:.3e}, \
          z-momentum error {momentum_error:.3e}, min inter-body distance {min_gap:.3} Δp, \
+         penetration {penetration:.2} Δp ({mixed} particles), \
          rear v_z {rear_vz:.0} m/s, plug v_z {plug_vz:.0} m/s, plug below the plate's rear face {:.0} %",
         hist.len(),
         100.0 * plug_below
     );
-    assert!(min_gap >= 0.5, "particles mixed: {min_gap}");
+    // No particle of one body passes the other's surface layer by more than a few hundredths of
+    // a spacing at this very coarse resolution (R/Δp = 6; none at the example's 20 µm, see the
+    // README). The closest approach, 0.4 Δp here, is no measure of mixing (see `mixing`).
+    assert!(
+        penetration < 0.1 && mixed <= 2,
+        "particles mixed: {penetration} Δp, {mixed}"
+    );
     assert!(energy_error < 0.05, "energy error {energy_error}");
     assert!(momentum_error < 1e-10, "momentum error {momentum_error}");
     assert!(
@@ -108,7 +121,10 @@ fn coarse_sphere_plate_summary() {
         s.momentum_error
     );
     assert!(s.energy_error < 0.05, "energy error {}", s.energy_error);
-    assert!(s.min_interbody_distance.is_some_and(|g| g >= 0.5));
+    assert!(s
+        .mixing
+        .iter()
+        .all(|m| m.max_penetration == 0.0 && m.max_mixed == 0));
 }
 
 /// Past 0.2 µs the debris leaves the plate (the issue asks for runs to 1 µs): no particle ever

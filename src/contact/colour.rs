@@ -284,7 +284,7 @@ pub fn normal<const D: usize>(
 
 /// The share of the tangential part of each pair's force that the colour law keeps (see the
 /// module doc).
-pub const TANGENTIAL: f64 = 0.3;
+pub const TANGENTIAL: f64 = 0.5;
 
 /// The colour-law force on i from its contact neighbour j (i of body A, j of body B) at
 /// distance r, with xij = x_i − x_j, reference volumes `vol0` and reference h0 = h0_ij: the

@@ -2,8 +2,15 @@
 //!
 //! Lattice points sit at o + (i + ½) Δp per axis. The origin o is the shape's bounding-box
 //! minimum, except along an axis with a symmetry plane, where o is shifted (by less than Δp) to
-//! lie on the plane (the first plane on that axis), so that the first layer sits Δp/2 from it and its ghosts Δp away: the
-//! mirrored lattice continues the real one.
+//! lie on the plane (the first plane on that axis), so that the first layer sits Δp/2 from it
+//! and its ghosts Δp away: the mirrored lattice continues the real one.
+//!
+//! **Curved surfaces.** On a lattice a curved surface is a staircase: the top layer of a
+//! sphere is a flat disc of radius ≈ √(R Δp) (4.5 Δp at R = 20 Δp), as wide as the contact
+//! patch of a Hertz impact, and a contact sees a flat punch. The outermost layer of spheres,
+//! discs, rings and cylinders is therefore moved along the surface normal to the depth Δp/2
+//! that a particle on a flat face has ([`conform`]): the bodies' surfaces are then smooth at
+//! the scale of the lattice, with every particle kept and the lattice untouched inside.
 
 use crate::boundary::Plane;
 use crate::case::Shape;
@@ -89,12 +96,73 @@ pub fn lattice<const D: usize>(shape: &Shape, dp: f64, planes: &[Plane]) -> Vec<
                 let x = Vector::<D>::from_fn(|k, _| origin[k] + (idx[k] as f64 + 0.5) * dp);
                 let on_model_side = planes.iter().all(|p| p.depth(x[p.axis]) >= 0.0);
                 if on_model_side && contains(shape, &x) {
-                    out.push(x);
+                    out.push(conform(shape, x, dp));
                 }
             }
         }
     }
     out
+}
+
+/// A lattice point of a curved shape within Δp of its surface, moved along the surface normal
+/// to the depth Δp/2 (see the module doc); other points, and every point of a box, unchanged.
+/// A shape cut by a symmetry plane is symmetric about it, so the particles of a quarter model
+/// and their ghosts are exactly those of the full model.
+pub fn conform<const D: usize>(shape: &Shape, x: Vector<D>, dp: f64) -> Vector<D> {
+    let c3 = |a: [f64; 3]| Vector::<D>::from_fn(|k, _| a[k]);
+    // The nearest surface: its depth below it and its outward normal.
+    let (depth, normal) = match *shape {
+        Shape::Box { .. } => return x,
+        Shape::Sphere { center, radius } => {
+            let d = x - c3(center);
+            let r = d.norm();
+            if r == 0.0 {
+                return x;
+            }
+            (radius - r, d / r)
+        }
+        Shape::Ring {
+            center,
+            inner_radius,
+            outer_radius,
+        } => {
+            let d = x - c3(center);
+            let r = d.norm();
+            if r == 0.0 {
+                return x;
+            }
+            if outer_radius - r <= r - inner_radius || inner_radius == 0.0 {
+                (outer_radius - r, d / r)
+            } else {
+                (r - inner_radius, -d / r)
+            }
+        }
+        Shape::Cylinder {
+            base,
+            axis,
+            radius,
+            length,
+        } => {
+            let a = c3(axis);
+            let d = x - c3(base);
+            let t = d.dot(&a);
+            let radial = d - a * t;
+            let rr = radial.norm();
+            let side = radius - rr;
+            let (low, high) = (t, length - t);
+            if side <= low.min(high) && rr > 0.0 {
+                (side, radial / rr)
+            } else if low <= high {
+                (low, -a)
+            } else {
+                (high, a)
+            }
+        }
+    };
+    if depth >= dp {
+        return x;
+    }
+    x + normal * (depth - 0.5 * dp)
 }
 
 #[cfg(test)]
@@ -133,7 +201,12 @@ mod tests {
         ];
         let q = lattice::<3>(&s, 0.05, &planes);
         assert_eq!(q.len() as f64, n / 4.0);
-        let xmin = q.iter().map(|x| x[0]).fold(f64::INFINITY, f64::min);
+        // Inside, the first layer sits Δp/2 from the planes (the surface shell is conformed).
+        let xmin = q
+            .iter()
+            .filter(|x| x.norm() < 0.9)
+            .map(|x| x[0])
+            .fold(f64::INFINITY, f64::min);
         assert!((xmin - 0.025).abs() < 1e-12);
     }
 
