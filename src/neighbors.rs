@@ -95,6 +95,9 @@ pub struct NeighborList {
     /// Dirty particles now, and lists rebuilt by partial rebuilds since the full build.
     dirty_count: usize,
     rebuilt: usize,
+    /// Per real particle: whether its list holds a particle of another class (body), as of the
+    /// last [`NeighborList::classify`].
+    pub mixed: Vec<bool>,
 }
 
 /// What the lists need before they can be used at the current positions.
@@ -270,6 +273,20 @@ impl NeighborList {
             return Refresh::Full;
         }
         Refresh::Partial
+    }
+
+    /// Mark the lists that hold a particle of another class (`class[j]`: its body): all of them
+    /// after a full build, the dirty ones after a partial rebuild. Most particles meet no other
+    /// body; passes over contacts can skip them without reading their lists.
+    pub fn classify(&mut self, class: &[u32], only_dirty: bool) {
+        let n = self.lists.len();
+        self.mixed.resize(n, false);
+        let (lists, dirty) = (&self.lists, &self.dirty);
+        self.mixed
+            .par_iter_mut()
+            .enumerate()
+            .filter(|(i, _)| !only_dirty || dirty[*i])
+            .for_each(|(i, m)| *m = lists[i].iter().any(|&j| class[j as usize] != class[i]));
     }
 
     /// Rebuild the lists of the dirty particles from the current positions, with no skin

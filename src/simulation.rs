@@ -259,6 +259,7 @@ impl<const D: usize> Simulation<D> {
         }
         if need == Refresh::Partial {
             self.neighbors.rebuild_dirty(&p.x, &self.h_search);
+            self.neighbors.classify(&p.body, true);
             self.stats.partial_searches += 1;
         }
         if need == Refresh::Full {
@@ -282,6 +283,7 @@ impl<const D: usize> Simulation<D> {
             self.ghosts.rebuild(p, &self.symmetry, 2.0 * h_max + skin);
             search_radii(p, wide, &mut self.h_search);
             self.neighbors.build(&p.x, &self.h_search, p.n_real, skin);
+            self.neighbors.classify(&p.body, false);
             self.stats.searches += 1;
         }
         // The colour contact law needs every particle's colour state first.

@@ -18,10 +18,17 @@
 //!   any pressure (hypervelocity shocks included), and follows the load the contact carries.
 //! - **Force.** −∇Φ pairs up as f_c,i = −Σ_j V0_i V0_j (P_i + P_j) ∇_i W_ij (h0), with
 //!   P = ½ σ_u(ε) dε/dc: eq. (5)'s shape with the pair factor K n (W_ij/W0)^(n−1) replaced by
-//!   the two particles' colour derivatives. Each pair's force is applied along the contact
-//!   normal n̂_ij (the two bodies' own outward normals, [`normal`]), never pulling: lattice
-//!   corrugation then pushes no particle sideways (no friction, no sliding into the gaps of
-//!   the other lattice).
+//!   the two particles' colour derivatives. Each pair's force is split along the contact
+//!   normal n̂_ij (from the two bodies' own outward normals, [`normal`]): the normal part acts
+//!   in full and never pulls; of the tangential part — for a pair, the lattice corrugation of
+//!   the other body's surface, not a physical force — only [`TANGENTIAL`] is kept. With all of
+//!   it the two lattices of a 7 km/s planar impact slide into each other's gaps at Δp = 0.05
+//!   mm (penetration 2.1 Δp); with none of it particles sliding sideways past each other at a
+//!   jet's edge are not kept apart, and the work of the forces departs from the potential in
+//!   curved contacts (a Hertz impact's energy strays by 1.3 % during the contact). Half keeps
+//!   the planar interface flat within 0.1 Δp and the Hertz excursion at 0.85 % (back to 3e-5
+//!   once the spheres part). Linear momentum is conserved exactly (every pair force is
+//!   antisymmetric); angular momentum and energy are not, to the extent measured above.
 
 use crate::kernel::Kernel;
 use crate::material::Material;
@@ -204,11 +211,11 @@ pub fn states<const D: usize, K: Kernel>(
     out.clear();
     out.par_extend((0..p.n_real).into_par_iter().map(|i| {
         let bi = p.body[i];
-        // Most particles have no neighbour of another body: a scan of the bodies tells.
-        let list = &nl.lists[i];
-        if list.iter().all(|&j| p.body[j as usize] == bi) {
+        // Most particles have no neighbour of another body (see `NeighborList::classify`).
+        if !nl.mixed.get(i).copied().unwrap_or(true) {
             return ColourState::default();
         }
+        let list = &nl.lists[i];
         let (mut c, mut g) = (0.0, 0.0);
         let mut own = [0.0; 3];
         let mut near = false;

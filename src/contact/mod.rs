@@ -2,39 +2,61 @@
 //! Algorithm for Meshless Methods", CMES 13(1) 35–48 (2006), eq. (5).
 //!
 //! Particles of different bodies never meet through the conservation equations (the paper's
-//! W(x_A − x_B) = 0 across bodies). A neighbour j of another body, r_ij < 2 h_ij, pushes i with
+//! W(x_A − x_B) = 0 across bodies). They meet through a contact force, the gradient of a
+//! contact potential built from the kernel on the neighbour list SPH already has. Eq. (5):
 //!
 //!   f_c,i = − Σ_{j ∈ C_i} V_i V_j K n (W_ij / W(Δp_avg))^(n−1) ∇_i W_ij ,
 //!
-//! the gradient of the contact potential Φ = Σ_pairs V_i V_j K W(Δp_avg) (W_ij/W(Δp_avg))^n.
-//! As printed, eq. (5) has W(Δp_avg)^n in the denominator and is a force only for K in N/m⁵;
-//! multiplying by W(Δp_avg) makes K a stress (Pa), the contact pressure scale, and gives exactly
-//! the shape of Monaghan's (2000) artificial stress that the paper names as its inspiration.
-//! ∇_i W_ij = (dW/dr) x_ij/r_ij with dW/dr < 0 points from i to j, so the minus sign makes the
-//! force repulsive. It acts along x_ij (no friction), is antisymmetric in i, j (momentum is
-//! conserved to round-off) and vanishes once r_ij ≥ 2 h_ij, so bodies separate with no tension.
+//! the gradient of Φ = Σ_pairs V_i V_j K W(Δp_avg) (W_ij/W(Δp_avg))^n. As printed, eq. (5) has
+//! W(Δp_avg)^n in the denominator and is a force only for K in N/m⁵; multiplying by W(Δp_avg)
+//! makes K a stress (Pa), and gives exactly the shape of Monaghan's (2000) artificial stress
+//! that the paper names as its inspiration. ∇_i W_ij = (dW/dr) x_ij/r_ij points from i to j, so
+//! the minus sign makes the force repulsive; it is antisymmetric in i, j (linear momentum is
+//! conserved to round-off) and vanishes once r_ij ≥ 2 h_ij, so bodies part with no tension.
 //!
-//! **Default stiffness.** DESIGN.md suggests K of the order of the larger bulk modulus. That is
-//! wrong for bodies that start touching at the lattice spacing (facing layers Δp apart, the
-//! natural way to build them): the contact then holds a traction ≈ 0.15 n K at t = 0 with
-//! nothing to balance it, and the stored potential (≈ 0.1 K Δp per unit area) launches the
-//! bodies apart (≈ 170 m/s for Al bars at Δp = 0.1 mm). strike instead sizes K so that the
-//! contact carries the *expected* interface pressure p_c at the natural spacing,
-//! K = p_c / (τ n), where p_c is the larger of the Hugoniot impact pressure at the bodies'
-//! relative speed and the weight of the heavier body on its footprint (gravity), with a floor of
-//! 10⁻⁴ of the smaller bulk modulus, and τ the traction per n K that the kernel carries across a
-//! lattice interface at the natural spacing ([`lattice_traction_per_nk`], computed for the
-//! dimension, kernel, h/Δp and n in use: 0.15–0.23 in 3D, more in 2D). The traction rises to
-//! ≈ 1.2 n K (several times p_c) as the layers close to 0.5 Δp, the margin against
-//! interpenetration. For the paper's 7 km/s Al case this gives K ≈ 2 × the bulk modulus, i.e.
-//! DESIGN's own estimate.
+//! strike has this form as the paper prints it (`law = "paper"`, [`pair`]) and a form of its
+//! own, the default (`law = "colour"`, [`colour`]). Both keep the paper's construction — a
+//! contact potential of kernel sums over the other body's particles on the existing neighbour
+//! list, its gradient the force — and they differ where the printed form fails:
 //!
-//! **Resolution.** The contact acts across the whole kernel support, 2h ≈ 2.4 Δp: a compliant
-//! layer about one spacing thick. It is faithful when the bodies close by much more than Δp
-//! while in contact — (v/c)(L/Δp) ≫ 1 for bars of length L meeting at ±v — as in an impact at
-//! hundreds of m/s and above. At ±10 m/s with L/Δp = 100 the layer dominates (the bars part at
-//! ∓13.7 m/s instead of ∓10; see the separation test in tests/verification_contact.rs) and a
-//! finer lattice is needed.
+//! 1. **Interdigitation at hypervelocity.** The paper's force acts along the line of centres,
+//!    and (W_ij/W0)^n with n = 4 is sharply peaked: two lattices pressed together feel the
+//!    corrugation of each other's surface as strongly as the pressure. At 7 km/s (97.6 GPa)
+//!    the facing layers slide into each other's gaps after 0.5 µs and mix 2–3 Δp deep; the
+//!    interface layer, held at the natural spacing by K while the bulk compresses to 0.65 Δp,
+//!    collapses onto the layer behind it, and the pressure overshoots by 75 %. The colour form
+//!    takes the power of the *sum* of kernel values (the other body's colour, smooth along a
+//!    surface to 0.05–1 %), applies each pair's force along the contact normal with only half
+//!    its tangential part (the paper's CN-SPH contact "has the direction of normal to the
+//!    contact surface"), and sizes the stiffness by the material's own compression curve, so
+//!    that the interface compresses as the bodies do.
+//! 2. **Load.** The paper's K is one number per pair of bodies, sized (by strike) from the 1D
+//!    impact pressure; a Hertz contact's pressure is set by geometry, 30 × that, and crushes
+//!    the contact layer. The colour form's traction is the material's σ_u(ε) at the interface
+//!    strain: it follows whatever load the contact carries, from gravity to a shock.
+//! 3. **Range.** The paper's potential reaches 2h ≈ 2.4 Δp, so bodies built touching (facing
+//!    layers Δp apart) already push each other, and after unloading the faces go on pushing
+//!    until they are 2.4 Δp apart: slow bars part 37 % too fast and a striker bounces back.
+//!    The colour form is offset to vanish at the colour of two bodies that merely touch (a
+//!    "potential offset" tied to Δp): no force at rest, none once the faces part.
+//!
+//! Measured (tests/contact_fidelity.rs and tests/verification_contact.rs): 7 km/s planar
+//! impact at Δp = 0.1 and 0.05 mm to 1.5 µs with no particle past the other's surface and the
+//! peak pressure +8 % / +14 % of the Hugoniot's (paper's form: 2.3 Δp deep, +75 %); Hertz
+//! spheres within 9 % of peak force and 7 % of duration at R/Δp = 20, 5 % at 30; slow bars
+//! parting at 9.60 and 9.72 m/s of 10 (paper's form 12.6); a striker at rest within 0.8 %.
+//!
+//! **Default stiffness of the paper's form.** DESIGN.md suggests K of the order of the larger
+//! bulk modulus. That is wrong for bodies that start touching at the lattice spacing: the
+//! contact then holds a traction ≈ 0.15 n K at t = 0 with nothing to balance it, and the stored
+//! potential (≈ 0.1 K Δp per unit area) launches the bodies apart (≈ 170 m/s for Al bars at
+//! Δp = 0.1 mm). strike instead sizes K so that the contact carries the *expected* interface
+//! pressure p_c at the natural spacing, K = p_c / (τ n), where p_c is the larger of the
+//! Hugoniot impact pressure at the bodies' relative speed and the weight of the heavier body on
+//! its footprint (gravity), with a floor of 10⁻⁴ of the smaller bulk modulus, and τ the traction
+//! per n K that the kernel carries across a lattice interface at the natural spacing
+//! ([`lattice_traction_per_nk`]: 0.15–0.23 in 3D, more in 2D). For the paper's 7 km/s Al case
+//! this gives K ≈ 2 × the bulk modulus, i.e. DESIGN's own estimate.
 
 pub mod colour;
 
