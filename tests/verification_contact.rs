@@ -25,6 +25,16 @@ fn load(name: &str) -> Case {
     strike::deck::load(std::path::Path::new(&path)).unwrap_or_else(|e| panic!("{path}: {e:?}"))
 }
 
+/// The deck, and the deck with every spacing halved: each case is checked at two resolutions.
+fn two_resolutions(name: &str) -> [Case; 2] {
+    let coarse = load(name);
+    let mut fine = coarse.clone();
+    for b in &mut fine.bodies {
+        b.spacing *= 0.5;
+    }
+    [coarse, fine]
+}
+
 fn body_means<const D: usize>(sim: &Simulation<D>) -> (Vec<[f64; 3]>, Vec<[f64; 3]>) {
     let nb = sim.body_names.len();
     let p = &sim.particles;
@@ -252,16 +262,18 @@ fn check_bars(rows: &[Row], v: f64, length: f64) -> BarFigures {
 #[test]
 fn bars_separate_through_the_contact() {
     let (v, length) = (400.0, 0.1);
-    let mut case = load("bars_contact");
-    set_bar_speed(&mut case, v);
-    set_bar_length(&mut case, length);
-    let (rows, _) = run::<2>(&case);
-    let fig = check_bars(&rows, v, length);
-
-    println!(
-        "contact bars part at {:.2} {:.2} m/s",
-        fig.v_after[0], fig.v_after[1]
-    );
+    for mut case in two_resolutions("bars_contact") {
+        set_bar_speed(&mut case, v);
+        set_bar_length(&mut case, length);
+        let (rows, _) = run::<2>(&case);
+        let fig = check_bars(&rows, v, length);
+        println!(
+            "contact bars, L/Δp = {:.0}: part at {:.2} {:.2} m/s",
+            length / case.bodies[0].spacing,
+            fig.v_after[0],
+            fig.v_after[1]
+        );
+    }
 }
 
 /// Welded twin at the deck's ±10 m/s: at the end (≈ 1.8 × 2L/c, when a contact pair has long
@@ -326,40 +338,45 @@ fn sliding_figures(rows: &[Row], case: &Case) -> (f64, f64, f64) {
 /// to y) leave the x momentum of the whole conserved, which is checked to 1e-10.
 #[test]
 fn sliding_keeps_tangential_momentum_only_with_contact() {
-    let case = load("sliding_contact");
-    let (rows, _) = run::<2>(&case);
-    let (slider, base, touching) = sliding_figures(&rows, &case);
-    let p0 = rows[0].d.momentum[0];
-    let px = rows
-        .iter()
-        .map(|r| (r.d.momentum[0] - p0).abs())
-        .fold(0.0, f64::max)
-        / rows[0].d.momentum_scale;
-    println!(
-        "sliding contact: slider |Δv_x/v| ≤ {slider:.3e}, base p_x/p0 ≤ {base:.3e}, in contact {:.1} % of steps, p_x drift {px:.2e}, min gap {:.3}",
-        100.0 * touching,
-        min_gap(&rows)
-    );
-    assert!(touching > 0.99, "the slider left the base");
-    assert!(
-        slider < 0.01,
-        "slider tangential momentum changed by {slider:.3e}"
-    );
-    assert!(
-        base < 0.01,
-        "base tangential momentum reached {base:.3e} of the slider's"
-    );
-    assert!(px < 1e-10, "x momentum drifts by {px:.3e}");
-    assert!(min_gap(&rows) >= 0.5);
-
-    let welded = load("sliding_welded");
-    let (wrows, _) = run::<2>(&welded);
-    let (wslider, wbase, _) = sliding_figures(&wrows, &welded);
-    println!("sliding welded: slider |Δv_x/v| ≤ {wslider:.3e}, base p_x/p0 ≤ {wbase:.3e}");
-    assert!(
-        wslider > 0.10 && wbase > 0.10,
-        "welded blocks did not exchange momentum"
-    );
+    for case in two_resolutions("sliding_contact") {
+        let (rows, _) = run::<2>(&case);
+        let (slider, base, touching) = sliding_figures(&rows, &case);
+        let p0 = rows[0].d.momentum[0];
+        let px = rows
+            .iter()
+            .map(|r| (r.d.momentum[0] - p0).abs())
+            .fold(0.0, f64::max)
+            / rows[0].d.momentum_scale;
+        println!(
+            "sliding contact, Δp = {} m: slider |Δv_x/v| ≤ {slider:.3e}, base p_x/p0 ≤ {base:.3e}, in contact {:.1} % of steps, p_x drift {px:.2e}, min gap {:.3}",
+            case.bodies[0].spacing,
+            100.0 * touching,
+            min_gap(&rows)
+        );
+        assert!(touching > 0.99, "the slider left the base");
+        assert!(
+            slider < 0.01,
+            "slider tangential momentum changed by {slider:.3e}"
+        );
+        assert!(
+            base < 0.01,
+            "base tangential momentum reached {base:.3e} of the slider's"
+        );
+        assert!(px < 1e-10, "x momentum drifts by {px:.3e}");
+        assert!(min_gap(&rows) >= 0.5);
+    }
+    for welded in two_resolutions("sliding_welded") {
+        let (wrows, _) = run::<2>(&welded);
+        let (wslider, wbase, _) = sliding_figures(&wrows, &welded);
+        println!(
+            "sliding welded, Δp = {} m: slider |Δv_x/v| ≤ {wslider:.3e}, base p_x/p0 ≤ {wbase:.3e}",
+            welded.bodies[0].spacing
+        );
+        assert!(
+            wslider > 0.10 && wbase > 0.10,
+            "welded blocks did not exchange momentum"
+        );
+    }
 }
 
 // ---------------------------------------------------------------------------------------------
@@ -368,75 +385,84 @@ fn sliding_keeps_tangential_momentum_only_with_contact() {
 /// Distance slid vs ½ g sin θ t² (gravity and a fixed body: momentum is not conserved).
 #[test]
 fn block_slides_down_the_incline() {
-    let case = load("incline");
-    let (rows, _) = run::<2>(&case);
-    let x0 = rows[0].com[0][0];
-    let mut worst: f64 = 0.0;
-    for r in rows.iter().filter(|r| r.d.time >= 0.3) {
-        let expected = 0.5 * 9.8 * 0.5 * r.d.time * r.d.time;
-        worst = worst.max(((r.com[0][0] - x0) / expected - 1.0).abs());
+    for case in two_resolutions("incline") {
+        let (rows, _) = run::<2>(&case);
+        let x0 = rows[0].com[0][0];
+        let mut worst: f64 = 0.0;
+        for r in rows.iter().filter(|r| r.d.time >= 0.3) {
+            let expected = 0.5 * 9.8 * 0.5 * r.d.time * r.d.time;
+            worst = worst.max(((r.com[0][0] - x0) / expected - 1.0).abs());
+        }
+        let last = rows.last().unwrap();
+        let t = last.d.time;
+        println!(
+            "incline, Δp = {} m: slid {:.4} m at t = {t:.4} s vs 2.45 t² = {:.4} m; worst relative error for t ≥ 0.3 s {worst:.3e}; min gap {:.3}",
+            case.bodies[0].spacing,
+            last.com[0][0] - x0,
+            2.45 * t * t,
+            min_gap(&rows)
+        );
+        assert!(worst < 0.05);
+        assert!(min_gap(&rows) >= 0.5);
     }
-    let last = rows.last().unwrap();
-    let t = last.d.time;
-    println!(
-        "incline: slid {:.4} m at t = {t:.4} s vs 2.45 t² = {:.4} m; worst relative error for t ≥ 0.3 s {worst:.3e}; min gap {:.3}",
-        last.com[0][0] - x0,
-        2.45 * t * t,
-        min_gap(&rows)
-    );
-    assert!(worst < 0.05);
-    assert!(min_gap(&rows) >= 0.5);
 }
 
 // ---------------------------------------------------------------------------------------------
 // Rubber rings
 
 #[test]
+///
+/// One resolution (Δp = 1 mm) here: at 0.5 mm a run to 2 ms takes two minutes, and the rings,
+/// whose rebound depends on their own (artificial-stress) dynamics more than on the contact,
+/// are still touching at 2 ms with either contact law (see the README).
 fn rubber_rings_rebound_and_separate_without_fracture() {
-    let case = load("rubber_rings");
-    let (rows, sim) = run::<2>(&case);
-    let f: Vec<bool> = rows
-        .iter()
-        .map(|r| r.d.body_contact_force[0] != [0.0; 3])
-        .collect();
-    let first = f.iter().position(|&x| x).expect("the rings never meet");
-    let last = f.iter().rposition(|&x| x).unwrap();
-    let end = rows.last().unwrap();
-    let gap = |r: &Row| r.com[1][0] - r.com[0][0];
-    let closest = rows.iter().map(gap).fold(f64::INFINITY, f64::min);
-    let edev = energy_dev(&rows);
-    let mdev = momentum_dev(&rows);
-    // No fracture: every particle keeps a particle of its own body within 1.5 Δp.
-    let p = &sim.particles;
-    let dp = case.bodies[0].spacing;
-    let isolated = (0..p.n_real)
-        .filter(|&i| {
-            !(0..p.n_real)
-                .any(|j| j != i && p.body[j] == p.body[i] && (p.x[i] - p.x[j]).norm() < 1.5 * dp)
-        })
-        .count();
-    println!(
-        "rings: contact from {:.3e} s to {:.3e} s; centres {:.4} m apart at closest, {:.4} m at the end, moving apart at {:.2} m/s each; energy {edev:.3e}; momentum {mdev:.2e}; min gap {:.3}; isolated particles {isolated}",
-        rows[first].d.time,
-        rows[(last + 1).min(rows.len() - 1)].d.time,
-        closest,
-        gap(end),
-        end.vmean[1][0],
-        min_gap(&rows)
-    );
-    assert!(last + 1 < rows.len(), "still in contact at the end");
-    assert!(
-        end.vmean[0][0] < 0.0 && end.vmean[1][0] > 0.0,
-        "not moving apart"
-    );
-    assert!(gap(end) > closest, "centres not moving apart");
-    assert_eq!(
-        isolated, 0,
-        "fracture: particles with no neighbour of their own body"
-    );
-    assert!(edev < 0.02, "energy drifts by {edev:.3e}");
-    assert!(mdev < 1e-10, "momentum drifts by {mdev:.3e}");
-    assert!(min_gap(&rows) >= 0.5);
+    for case in [load("rubber_rings")] {
+        let (rows, sim) = run::<2>(&case);
+        let f: Vec<bool> = rows
+            .iter()
+            .map(|r| r.d.body_contact_force[0] != [0.0; 3])
+            .collect();
+        let first = f.iter().position(|&x| x).expect("the rings never meet");
+        let last = f.iter().rposition(|&x| x).unwrap();
+        let end = rows.last().unwrap();
+        let gap = |r: &Row| r.com[1][0] - r.com[0][0];
+        let closest = rows.iter().map(gap).fold(f64::INFINITY, f64::min);
+        let edev = energy_dev(&rows);
+        let mdev = momentum_dev(&rows);
+        // No fracture: every particle keeps a particle of its own body within 1.5 Δp.
+        let p = &sim.particles;
+        let dp = case.bodies[0].spacing;
+        let isolated = (0..p.n_real)
+            .filter(|&i| {
+                !(0..p.n_real).any(|j| {
+                    j != i && p.body[j] == p.body[i] && (p.x[i] - p.x[j]).norm() < 1.5 * dp
+                })
+            })
+            .count();
+        println!(
+            "rings, Δp = {} m: contact from {:.3e} s to {:.3e} s; centres {:.4} m apart at closest, {:.4} m at the end, moving apart at {:.2} m/s each; energy {edev:.3e}; momentum {mdev:.2e}; min gap {:.3}; isolated particles {isolated}",
+            case.bodies[0].spacing,
+            rows[first].d.time,
+            rows[(last + 1).min(rows.len() - 1)].d.time,
+            closest,
+            gap(end),
+            end.vmean[1][0],
+            min_gap(&rows)
+        );
+        assert!(last + 1 < rows.len(), "still in contact at the end");
+        assert!(
+            end.vmean[0][0] < 0.0 && end.vmean[1][0] > 0.0,
+            "not moving apart"
+        );
+        assert!(gap(end) > closest, "centres not moving apart");
+        assert_eq!(
+            isolated, 0,
+            "fracture: particles with no neighbour of their own body"
+        );
+        assert!(edev < 0.02, "energy drifts by {edev:.3e}");
+        assert!(mdev < 1e-10, "momentum drifts by {mdev:.3e}");
+        assert!(min_gap(&rows) >= 0.5);
+    }
 }
 
 // ---------------------------------------------------------------------------------------------
@@ -493,8 +519,11 @@ fn planar_impact_meets_rankine_hugoniot() {
     let up = v / 2.0;
     let us = c0 + s1 * up;
     let p = rho0 * us * up;
-    for name in ["planar_impact_contact", "planar_impact_welded"] {
-        let (p_m, u_m, us_m, rows) = planar_figures(&load(name));
+    for (name, case) in ["planar_impact_contact", "planar_impact_welded"]
+        .iter()
+        .flat_map(|&n| two_resolutions(n).map(|c| (n, c)))
+    {
+        let (p_m, u_m, us_m, rows) = planar_figures(&case);
         assert!(
             (p_m / p - 1.0).abs() < 0.05,
             "{name}: pressure {p_m:.4e} vs {p:.4e}"
