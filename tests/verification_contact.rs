@@ -480,11 +480,23 @@ fn planar_figures(case: &Case) -> (f64, f64, f64, Vec<Row>) {
             rows.push(Row { d, vmean, com });
         }
         let p = &sim.particles;
-        // Shock front: the farthest target particle moving faster than 250 m/s.
-        let front = (0..p.n_real)
-            .filter(|&i| p.body[i] == 1 && p.v[i][0] > 250.0)
-            .map(|i| p.x[i][0])
-            .fold(f64::NEG_INFINITY, f64::max);
+        // Shock front: where the target's velocity, averaged over each lattice column,
+        // crosses u_p/2 = 250 m/s, interpolated between the columns on either side (the
+        // farthest particle above 250 m/s alone moves in steps of Δp, 1–3 % of U_s here).
+        let dp = case.bodies[1].spacing;
+        let mut columns = std::collections::BTreeMap::<i64, (f64, f64, f64)>::new();
+        for i in (0..p.n_real).filter(|&i| p.body[i] == 1) {
+            let c = columns.entry((p.x[i][0] / dp).round() as i64).or_default();
+            *c = (c.0 + p.x[i][0], c.1 + p.v[i][0], c.2 + 1.0);
+        }
+        let profile: Vec<(f64, f64)> = columns.values().map(|c| (c.0 / c.2, c.1 / c.2)).collect();
+        let k = profile
+            .iter()
+            .rposition(|c| c.1 > 250.0)
+            .filter(|&k| k + 1 < profile.len())
+            .expect("no shock front inside the target");
+        let ((x0, v0), (x1, v1)) = (profile[k], profile[k + 1]);
+        let front = x0 + (v0 - 250.0) / (v0 - v1) * (x1 - x0);
         fronts.push((sim.state.time, front));
         // Plateau: target particles from 0.5 mm behind the interface to 0.5 mm behind the front.
         for i in (0..p.n_real)
