@@ -115,7 +115,7 @@ fn engine_resumes_bit_for_bit_from_any_step() {
 #[test]
 fn resumed_run_is_bit_identical() {
     let case = case();
-    let total = 130;
+    let total = 3 * REORDER_EVERY + 10;
     // A: uninterrupted.
     let a = opts("a", total, None);
     let sa = run(&case, &a).unwrap();
@@ -127,8 +127,17 @@ fn resumed_run_is_bit_identical() {
         .skip(1)
         .filter_map(|s| s.get(..6)?.parse().ok())
         .collect();
-    for stop in [REORDER_EVERY, 2 * REORDER_EVERY, 77] {
-        assert!(!snapshots.contains(&stop), "{stop} is a snapshot step");
+    // Two stops at multiples of the reorder interval and one between, none at a snapshot.
+    let free = |s: &u64| !snapshots.contains(s);
+    let mut stops: Vec<u64> = (1..)
+        .map(|k| k * REORDER_EVERY)
+        .take_while(|&s| s < total)
+        .filter(free)
+        .take(2)
+        .collect();
+    stops.extend((77..total).filter(|s| s % REORDER_EVERY != 0).find(free));
+    assert_eq!(stops.len(), 3, "no stop left between the snapshots");
+    for stop in stops {
         let dir = format!("stop{stop}");
         // B: the same run stopped there; then resumed from B's checkpoint.
         let b = opts(&dir, stop, None);
