@@ -254,7 +254,7 @@ fn check_bars(rows: &[Row], v: f64, length: f64) -> BarFigures {
 /// are no longer linear in the strain: σ(ε) = K(1/(1−ε) − 1) + (4G/3) ln(1/(1−ε)) stiffens, so
 /// the compression front is a shock at 6318 m/s carrying 6.82 GPa, and the release comes back
 /// at 6494 m/s (head) to c. The finite-strain contact time is therefore 31.2–31.6 µs, not
-/// 32.53: measured 31.98 and 31.91 µs at the two resolutions, stress 6.789 and 6.790 GPa —
+/// 32.53: measured 31.99 and 31.92 µs at the two resolutions, stress 6.789 and 6.790 GPa —
 /// refinement moves toward the finite-strain answer. (The slow-bar case, where the strain is
 /// small and the acoustic figures exact, is in tests/contact_fidelity.rs.)
 #[test]

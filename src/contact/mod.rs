@@ -29,7 +29,10 @@
 //!    surface to 0.05–1 %), applies each pair's force along the contact normal with only half
 //!    its tangential part (the paper's CN-SPH contact "has the direction of normal to the
 //!    contact surface"), and sizes the stiffness by the material's own compression curve, so
-//!    that the interface compresses as the bodies do.
+//!    that the interface compresses as the bodies do. The potential alone is conservative: the
+//!    facing layers of a 7 km/s impact bounce off it as off a spring (closing to 0.44 Δp); the
+//!    colour form gives the interface the bulk's shock viscosity on its normal closing speed
+//!    ([`colour::damping`]), as the shock it is part of.
 //! 2. **Load.** The paper's K is one number per pair of bodies, sized (by strike) from the 1D
 //!    impact pressure; a Hertz contact's pressure is set by geometry, 30 × that, and crushes
 //!    the contact layer. The colour form's traction is the material's σ_u(ε) at the interface
@@ -41,10 +44,11 @@
 //!    "potential offset" tied to Δp): no force at rest, none once the faces part.
 //!
 //! Measured (tests/contact_fidelity.rs and tests/verification_contact.rs): 7 km/s planar
-//! impact at Δp = 0.1 and 0.05 mm to 1.5 µs with no particle past the other's surface and the
-//! peak pressure +8 % / +14 % of the Hugoniot's (paper's form: 2.3 Δp deep, +75 %); Hertz
-//! spheres within 9 % of peak force and 7 % of duration at R/Δp = 20, 5 % at 30; slow bars
-//! parting at 9.60 and 9.72 m/s of 10 (paper's form 12.6); a striker at rest within 0.8 %.
+//! impact at Δp = 0.1 and 0.05 mm to 1.5 µs with no particle past the other's surface, the
+//! closest pair 0.58 Δp apart and the peak pressure +6 % of the Hugoniot's at both (paper's
+//! form: 2.3 Δp deep, +75 %); Hertz spheres' peak force +7.1 / +4.7 % and duration −6.0 /
+//! −4.3 % at R/Δp = 20 / 30; slow bars parting at 9.60 and 9.72 m/s of 10 (paper's form
+//! 12.6); a striker at rest within 0.8 / 0.4 %.
 //!
 //! **Default stiffness of the paper's form.** DESIGN.md suggests K of the order of the larger
 //! bulk modulus. That is wrong for bodies that start touching at the lattice spacing: the
