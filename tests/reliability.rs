@@ -45,6 +45,18 @@ fn s(p: &Path) -> &str {
     p.to_str().unwrap()
 }
 
+/// `strike run DECK --resume OUT/checkpoint.bin --max-steps CAP`.
+fn resume(deck: &Path, out: &Path, cap: &str) -> Output {
+    strike(&[
+        "run",
+        s(deck),
+        "--resume",
+        s(&out.join("checkpoint.bin")),
+        "--max-steps",
+        cap,
+    ])
+}
+
 fn stderr(o: &Output) -> String {
     String::from_utf8_lossy(&o.stderr).into_owned()
 }
@@ -135,14 +147,7 @@ fn signals_stop_with_a_checkpoint_that_resumes() {
         assert!(hidden_files(&out).is_empty(), "{:?}", hidden_files(&out));
         // The checkpoint is of the last step and goes on from it (briefly: a step cap).
         let cap = (summary.steps + 20).to_string();
-        let resumed = strike(&[
-            "run",
-            s(&deck),
-            "--resume",
-            s(&out.join("checkpoint.bin")),
-            "--max-steps",
-            &cap,
-        ]);
+        let resumed = resume(&deck, &out, &cap);
         assert!(resumed.status.success(), "{}", stderr(&resumed));
         let again = Summary::read(&out.join("summary.json")).unwrap();
         assert_eq!(again.status, "max_steps");
@@ -192,14 +197,7 @@ fn kill_9_leaves_only_complete_files() {
     let c = strike::output::checkpoint::Checkpoint::<2>::read(&out.join("checkpoint.bin"), &case)
         .unwrap();
     let cap = (c.sim.step + 5).to_string();
-    let resumed = strike(&[
-        "run",
-        s(&deck),
-        "--resume",
-        s(&out.join("checkpoint.bin")),
-        "--max-steps",
-        &cap,
-    ]);
+    let resumed = resume(&deck, &out, &cap);
     assert!(resumed.status.success(), "{}", stderr(&resumed));
 }
 
