@@ -515,13 +515,16 @@ fn particle_rates<const D: usize, K: Kernel, const ART: bool>(
                                 model.body_material[bi as usize],
                                 model.body_material[gj.body as usize],
                             );
-                            let (f, pot, k) = colour::backstop(
-                                (&law.curves[ka], &law.curves[kb]),
-                                (&model.materials[ka], &model.materials[kb]),
-                                vol0,
-                                r,
-                                0.5 * (gi.dp + gj.dp),
-                            );
+                            let backstop = |r: f64| {
+                                colour::backstop(
+                                    (&law.curves[ka], &law.curves[kb]),
+                                    (&model.materials[ka], &model.materials[kb]),
+                                    vol0,
+                                    r,
+                                    0.5 * (gi.dp + gj.dp),
+                                )
+                            };
+                            let (f, pot, k) = backstop(r);
                             for a in 0..D {
                                 fc[a] += f * xij[a] / r;
                             }
@@ -534,14 +537,7 @@ fn particle_rates<const D: usize, K: Kernel, const ART: bool>(
                             let closing = -dot(&vij, &xij) / r;
                             if closing > 0.0 {
                                 let ahead = r - closing * model.cfl * hi / (gi.c + closing);
-                                let (_, _, k) = colour::backstop(
-                                    (&law.curves[ka], &law.curves[kb]),
-                                    (&model.materials[ka], &model.materials[kb]),
-                                    vol0,
-                                    ahead.max(0.0),
-                                    0.5 * (gi.dp + gj.dp),
-                                );
-                                k_ahead = k_ahead.max(k);
+                                k_ahead = k_ahead.max(backstop(ahead.max(0.0)).2);
                             }
                         }
                         let (t, mu) = colour::damping::<D, K>(
