@@ -15,6 +15,7 @@
 //! `contact`, enter only through [`crate::contact`] (the paper's W = 0 across bodies).
 
 pub mod artificial_stress;
+pub mod correction;
 pub mod viscosity;
 
 use crate::contact::colour::{self, ColourLaw, ColourState};
