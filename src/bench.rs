@@ -180,7 +180,21 @@ fn measure_dim<const D: usize>(
 }
 
 /// The groups of cases `run_all` can be limited to.
-pub const GROUPS: [&str; 4] = ["scaling", "cubes_3d", "sphere_plate", "plates_2d"];
+pub const GROUPS: [&str; 5] = [
+    "scaling",
+    "cubes_3d",
+    "cubes_3d_cn",
+    "sphere_plate",
+    "plates_2d",
+];
+
+/// The cubes in CN-SPH (`formulation = "corrected"`).
+fn cubes_3d_cn() -> String {
+    CUBES_3D.replace(
+        "name = \"cubes_3d\"",
+        "name = \"cubes_3d_cn\"\nformulation = \"corrected\"",
+    )
+}
 
 /// The standard benchmark. First the scaling series on all cores — cubes of 100³ (the
 /// million-particle memory figure, measured first while the process is fresh), 50³ and 25³
@@ -216,19 +230,20 @@ pub fn run_all(
         cases.push(c);
     }
     let (warm, steps) = if quick { (1, 2) } else { (5, 60) };
-    let decks: [(&str, &str, &str, u64); 3] = [
-        ("cubes_3d", CUBES_3D, "bench:cubes_3d", steps),
+    let decks: [(&str, String, &str, u64); 4] = [
+        ("cubes_3d", CUBES_3D.into(), "bench:cubes_3d", steps),
+        ("cubes_3d_cn", cubes_3d_cn(), "bench:cubes_3d_cn", steps),
         (
             "sphere_plate",
-            SPHERE_PLATE,
+            SPHERE_PLATE.into(),
             "bench:sphere_plate",
             steps / 2,
         ),
-        ("plates_2d", PLATES_2D, "bench:plates_2d", steps),
+        ("plates_2d", PLATES_2D.into(), "bench:plates_2d", steps),
     ];
     for (_, text, label, s) in decks.into_iter().filter(|d| wanted(d.0)) {
         for &t in &threads {
-            let c = measure(text, label, t, warm, s.max(2))?;
+            let c = measure(&text, label, t, warm, s.max(2))?;
             report(&c);
             cases.push(c);
         }

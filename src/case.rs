@@ -23,6 +23,16 @@ pub enum KernelKind {
     WendlandC2,
 }
 
+/// Which SPH formulation the conservation equations use (see `physics::correction`).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+pub enum Formulation {
+    /// Conventional SPH: ∇_i W_ij as it is.
+    #[default]
+    Conventional,
+    /// CN-SPH: first-order corrected gradients B_i ∇_i W_ij (Randles–Libersky).
+    Corrected,
+}
+
 /// Everything a run needs.
 #[derive(Debug, Clone)]
 pub struct Case {
@@ -52,6 +62,7 @@ pub struct Simulation {
     /// Optional hard cap on steps.
     pub max_steps: Option<u64>,
     pub kernel: KernelKind,
+    pub formulation: Formulation,
     /// h0 = smoothing_ratio × spacing (default 1.2).
     pub smoothing_ratio: f64,
     /// Monaghan–Gingold α (default 1) and β (default 2).
@@ -234,6 +245,10 @@ impl Case {
                 self.dimension.to_string(),
             ),
             ("simulation.kernel".into(), format!("{:?}", s.kernel)),
+            (
+                "simulation.formulation".into(),
+                format!("{:?}", s.formulation),
+            ),
             ("simulation.cfl".into(), format!("{:?}", s.cfl)),
             (
                 "simulation.smoothing_ratio".into(),

@@ -215,7 +215,7 @@ fn describe_estimated(case: &Case, estimated: &[f64], dt: f64) -> String {
 fn header(case: &Case, w: &mut String) {
     let _ = writeln!(
         w,
-        "case '{}' ({}, {}D{})",
+        "case '{}' ({}, {}D{}, {})",
         case.name,
         case.file,
         case.dimension,
@@ -223,6 +223,10 @@ fn header(case: &Case, w: &mut String) {
             ", plane strain"
         } else {
             ""
+        },
+        match case.simulation.formulation {
+            crate::case::Formulation::Conventional => "conventional SPH",
+            crate::case::Formulation::Corrected => "CN-SPH (corrected gradients)",
         }
     );
 }

@@ -3,14 +3,14 @@
 
 use crate::boundary;
 use crate::boundary::Plane;
-use crate::case::{Case, KernelKind};
+use crate::case::{Case, Formulation, KernelKind};
 use crate::contact::colour::ColourState;
 use crate::error::{Error, Result};
 use crate::integrate;
 use crate::kernel::{CubicSpline, WendlandC2};
 use crate::mixing::{self, PairMixing};
 use crate::neighbors::{NeighborList, Refresh};
-use crate::particles::{to3, Particles};
+use crate::particles::{to3, Particles, Tensor};
 use crate::physics::{self, Model, Rates};
 use crate::setup;
 use rayon::prelude::*;
@@ -42,6 +42,8 @@ pub struct Diagnostics {
     pub body_contact_force: Vec<[f64; 3]>,
     /// Mixing figures of each pair of bodies, in [`crate::mixing::pair_index`] order.
     pub mixing: Vec<PairMixing>,
+    /// CN-SPH: particles that kept the uncorrected gradient this step (A_i near singular).
+    pub correction_fallbacks: usize,
     /// Neighbour entries of the real particles this step (particle-neighbour interactions).
     pub interactions: usize,
 }
@@ -71,6 +73,9 @@ pub struct Simulation<const D: usize> {
     colour: Vec<ColourState>,
     /// Search radii max(h, h0): the colour law reaches 2 h0 also where h has shrunk.
     h_search: Vec<f64>,
+    /// CN-SPH: each particle's correction, and B of every particle, ghosts included.
+    corrections: Vec<physics::correction::Correction<D>>,
+    corr: Vec<Tensor<D>>,
 }
 
 /// The scalar state of a run in progress, beside its particles: what a checkpoint keeps.
@@ -96,6 +101,8 @@ pub struct SimState {
 pub struct SearchStats {
     pub searches: u64,
     pub partial_searches: u64,
+    /// CN-SPH: particle-steps that kept the uncorrected gradient (A_i near singular).
+    pub correction_fallbacks: u64,
 }
 
 /// Sums over the particles are taken per block of this many particles, in parallel, and the
@@ -212,6 +219,8 @@ impl<const D: usize> Simulation<D> {
             body_force_blocks: Vec::new(),
             colour: Vec::new(),
             h_search: Vec::new(),
+            corrections: Vec::new(),
+            corr: Vec::new(),
         })
     }
 
@@ -305,13 +314,37 @@ impl<const D: usize> Simulation<D> {
                     s
                 });
         }
-        let (nl, model, colour) = (&self.neighbors, &self.model, &self.colour);
+        // CN-SPH: the gradient corrections, in their own pass before the rates.
+        self.corr.clear();
+        let mut fallbacks = 0;
+        if self.model.formulation == Formulation::Corrected {
+            let (nl, model, out) = (&self.neighbors, &self.model, &mut self.corrections);
+            fallbacks = match self.kernel {
+                KernelKind::CubicSpline => physics::corrections(CubicSpline, p, nl, model, out),
+                KernelKind::WendlandC2 => physics::corrections(WendlandC2, p, nl, model, out),
+            };
+            self.stats.correction_fallbacks += fallbacks as u64;
+            self.corr.extend(self.corrections.iter().map(|c| c.b));
+            // A ghost's B is its source's seen in the mirror: M B M, M = I − 2 e_a e_aᵀ.
+            self.ghosts
+                .extend_to_ghosts_with(&mut self.corr, &self.symmetry, |mut b, axis| {
+                    for k in 0..D {
+                        if k != axis {
+                            b[(axis, k)] = -b[(axis, k)];
+                            b[(k, axis)] = -b[(k, axis)];
+                        }
+                    }
+                    b
+                });
+        }
+        let (nl, model) = (&self.neighbors, &self.model);
+        let fields = (&self.colour[..], &self.corr[..]);
         match self.kernel {
             KernelKind::CubicSpline => {
-                physics::compute_rates(CubicSpline, p, nl, model, colour, &mut self.rates)
+                physics::compute_rates(CubicSpline, p, nl, model, fields, &mut self.rates)
             }
             KernelKind::WendlandC2 => {
-                physics::compute_rates(WendlandC2, p, nl, model, colour, &mut self.rates)
+                physics::compute_rates(WendlandC2, p, nl, model, fields, &mut self.rates)
             }
         }
         let rates = &self.rates.particles;
@@ -378,6 +411,7 @@ impl<const D: usize> Simulation<D> {
             max_pressure: old.max_pressure,
             min_interbody_distance: old.gap.is_finite().then_some(old.gap),
             mixing,
+            correction_fallbacks: fallbacks,
             ..Default::default()
         };
         for block in self.body_force_blocks.chunks_exact(bodies.max(1)) {

@@ -2,7 +2,7 @@
 
 use std::collections::HashMap;
 use std::path::Path;
-use strike::case::Case;
+use strike::case::{Case, Formulation};
 use strike::deck;
 use strike::simulation::{Diagnostics, Simulation};
 
@@ -39,7 +39,17 @@ fn run(case: &Case) -> (Simulation<3>, Vec<Diagnostics>) {
 /// particle of the quarter, matched to the full model's particle that started at the same place.
 #[test]
 fn quarter_model_matches_full_model() {
-    let (q_case, f_case) = (small_case(true), small_case(false));
+    for f in [Formulation::Conventional, Formulation::Corrected] {
+        quarter_and_full(f);
+    }
+}
+
+/// Quarter against full model in one formulation (CN-SPH: the ghosts carry their sources'
+/// gradient correction seen in the mirror).
+fn quarter_and_full(formulation: Formulation) {
+    let (mut q_case, mut f_case) = (small_case(true), small_case(false));
+    q_case.simulation.formulation = formulation;
+    f_case.simulation.formulation = formulation;
     let q0 = Simulation::<3>::new(&q_case).unwrap().particles.x;
     let f0 = Simulation::<3>::new(&f_case).unwrap().particles.x;
     let (q, qh) = run(&q_case);
@@ -67,7 +77,7 @@ fn quarter_model_matches_full_model() {
     let (qe, fe) = (qh.last().unwrap(), fh.last().unwrap());
     let rel = |a: f64, b: f64| (a - b).abs() / b.abs().max(1e-300);
     println!(
-        "quarter vs full ({} vs {} particles, {} steps): worst position difference {worst:.3e} Δp, \
+        "quarter vs full, {formulation:?} ({} vs {} particles, {} steps): worst position difference {worst:.3e} Δp, \
          kinetic {:.3e}, internal {:.3e}, contact {:.3e} relative",
         q.particles.n_real,
         f.particles.n_real,
@@ -86,13 +96,20 @@ fn quarter_model_matches_full_model() {
 /// The same contact case on 1 and 2 threads gives bit-identical particles and diagnostics.
 #[test]
 fn bit_identical_on_one_and_two_threads() {
-    let case = small_case(true);
+    for f in [Formulation::Conventional, Formulation::Corrected] {
+        let mut case = small_case(true);
+        case.simulation.formulation = f;
+        one_and_two_threads(&case);
+    }
+}
+
+fn one_and_two_threads(case: &Case) {
     let on = |threads: usize| {
         rayon::ThreadPoolBuilder::new()
             .num_threads(threads)
             .build()
             .unwrap()
-            .install(|| run(&case))
+            .install(|| run(case))
     };
     let (a, ah) = on(1);
     let (b, bh) = on(2);

@@ -2,10 +2,19 @@
 //! decks, run in-process.
 
 use std::path::Path;
-use strike::case::{Case, Motion};
+use strike::case::{Case, Formulation, Motion};
 use strike::deck;
 use strike::simulation::{Diagnostics, Simulation};
 use strike::Error;
+
+/// Both formulations: conventional SPH and CN-SPH.
+const FORMULATIONS: [Formulation; 2] = [Formulation::Conventional, Formulation::Corrected];
+
+fn example_in(name: &str, formulation: Formulation) -> Case {
+    let mut case = example(name);
+    case.simulation.formulation = formulation;
+    case
+}
 
 fn example(name: &str) -> Case {
     let path = Path::new(env!("CARGO_MANIFEST_DIR"))
@@ -49,10 +58,16 @@ fn elastic_constants(case: &Case) -> (f64, f64, f64) {
 }
 
 /// Elastic wave in uniaxial strain: the front (where v_x passes half the piston's speed) moves
-/// at c_L = √((K + 4G/3)/ρ), within 2 %; the stress behind it is −ρ c_L v.
+/// at c_L = √((K + 4G/3)/ρ), within 2 %; the stress behind it is −ρ c_L v. Both formulations.
 #[test]
 fn elastic_wave_front_speed() {
-    let case = example("elastic_wave.toml");
+    for f in FORMULATIONS {
+        elastic_wave(f);
+    }
+}
+
+fn elastic_wave(formulation: Formulation) {
+    let case = example_in("elastic_wave.toml", formulation);
     let (rho, k, g) = elastic_constants(&case);
     let c = ((k + 4.0 / 3.0 * g) / rho).sqrt();
     let v = case.bodies[0].velocity[0];
@@ -64,7 +79,7 @@ fn elastic_wave_front_speed() {
     let speed = (x2 - x1) / (t2 - t1);
     let err = speed / c - 1.0;
     println!(
-        "elastic wave: front {speed:.1} m/s, c_L {c:.1} m/s, error {:.3} %",
+        "elastic wave ({formulation:?}): front {speed:.1} m/s, c_L {c:.1} m/s, error {:.3} %",
         100.0 * err
     );
     assert!(err.abs() < 0.02, "front speed {speed} vs {c}");
@@ -76,15 +91,21 @@ fn elastic_wave_front_speed() {
         .collect();
     let sxx = behind.iter().sum::<f64>() / behind.len() as f64;
     let expect = -rho * c * v;
-    println!("elastic wave: σ_xx {sxx:.4e} Pa, −ρ c v {expect:.4e} Pa");
+    println!("elastic wave ({formulation:?}): σ_xx {sxx:.4e} Pa, −ρ c v {expect:.4e} Pa");
     assert!((sxx / expect - 1.0).abs() < 0.02);
 }
 
 /// Uniaxial-strain loading of an elastic–perfectly plastic column: the elastic precursor
-/// carries σ_HEL = Y (1 − ν)/(1 − 2ν), within 5 %.
+/// carries σ_HEL = Y (1 − ν)/(1 − 2ν), within 5 %. Both formulations.
 #[test]
 fn hugoniot_elastic_limit() {
-    let case = example("hugoniot_elastic_limit.toml");
+    for f in FORMULATIONS {
+        hel(f);
+    }
+}
+
+fn hel(formulation: Formulation) {
+    let case = example_in("hugoniot_elastic_limit.toml", formulation);
     let (_, k, g) = elastic_constants(&case);
     let y = match case.materials[case.bodies[1].material].strength {
         strike::case::StrengthSpec::VonMises { yield_stress, .. } => yield_stress,
@@ -105,7 +126,7 @@ fn hugoniot_elastic_limit() {
         .filter(|&i| p.body[i] == 1 && p.x[i][0] < 10e-3)
         .all(|i| p.eps_p[i] > 0.0);
     println!(
-        "HEL: precursor {:.4} GPa, Y(1−ν)/(1−2ν) = {:.4} GPa (ν = {nu:.4}), error {:.2} %",
+        "HEL ({formulation:?}): precursor {:.4} GPa, Y(1−ν)/(1−2ν) = {:.4} GPa (ν = {nu:.4}), error {:.2} %",
         precursor / 1e9,
         hel / 1e9,
         100.0 * (precursor / hel - 1.0)
@@ -118,10 +139,17 @@ fn hugoniot_elastic_limit() {
 }
 
 /// Energy in an elastic case with no external work: the piston of the elastic-wave deck set
-/// free as a flyer welded to the column. Kinetic + internal energy drifts < 1 %.
+/// free as a flyer welded to the column. Kinetic + internal energy drifts < 1 %, and momentum
+/// is conserved to round-off. Both formulations.
 #[test]
 fn elastic_energy_is_conserved() {
-    let mut case = example("elastic_wave.toml");
+    for f in FORMULATIONS {
+        elastic_energy(f);
+    }
+}
+
+fn elastic_energy(formulation: Formulation) {
+    let mut case = example_in("elastic_wave.toml", formulation);
     case.bodies[0].motion = Motion::Free;
     let mut sim = Simulation::<2>::new(&case).unwrap();
     let hist = run_to(&mut sim, 12e-6);
@@ -131,11 +159,18 @@ fn elastic_energy_is_conserved() {
         .map(|d| (d.total - e0).abs())
         .fold(0.0, f64::max)
         / e0;
+    let p0 = hist[0].momentum[0];
+    let dp = hist
+        .iter()
+        .map(|d| (d.momentum[0] - p0).abs())
+        .fold(0.0, f64::max)
+        / hist[0].momentum_scale;
     println!(
-        "elastic energy drift {:.3e} over {} steps",
+        "elastic energy ({formulation:?}): drift {:.3e} over {} steps, x momentum {dp:.1e}",
         drift,
         hist.len()
     );
+    assert!(dp < 1e-10, "momentum drift {dp}");
     assert!(drift < 0.01, "energy drift {drift}");
     // The energy really moved: most of the flyer's kinetic energy went into the column.
     assert!(hist.last().unwrap().internal > 0.2 * e0);

@@ -18,9 +18,9 @@ use std::ops::Range;
 use std::path::Path;
 
 use crate::case::{
-    BodySpec, Case, ColorBy, ContactLaw, EosSpec, InteractionKind, InteractionSpec, KernelKind,
-    Location, MaterialSpec, Motion, OutputSpec, PictureSpec, Shape, Simulation, StrengthSpec,
-    SymmetryPlane,
+    BodySpec, Case, ColorBy, ContactLaw, EosSpec, Formulation, InteractionKind, InteractionSpec,
+    KernelKind, Location, MaterialSpec, Motion, OutputSpec, PictureSpec, Shape, Simulation,
+    StrengthSpec, SymmetryPlane,
 };
 use crate::error::{DeckLocation, Error, Result};
 pub use library::{library_material, library_names};
@@ -813,6 +813,18 @@ impl Ctx<'_> {
             },
             None => KernelKind::CubicSpline,
         };
+        let formulation = match &s.formulation {
+            Some(f) => match self.choice(
+                f,
+                "simulation.formulation",
+                &["conventional", "corrected"],
+                "formulation",
+            )? {
+                "corrected" => Formulation::Corrected,
+                _ => Formulation::Conventional,
+            },
+            None => Formulation::Conventional,
+        };
         let smoothing_ratio = match &s.smoothing_ratio {
             Some(r) => self.check(
                 r,
@@ -899,6 +911,7 @@ impl Ctx<'_> {
                 cfl,
                 max_steps,
                 kernel,
+                formulation,
                 smoothing_ratio,
                 viscosity_alpha,
                 viscosity_beta,

@@ -21,6 +21,8 @@ pub struct Summary {
     /// Full neighbour searches, and steps with a partial rebuild (see `neighbors`).
     pub searches: u64,
     pub partial_searches: u64,
+    /// CN-SPH: particle-steps that kept the uncorrected gradient (0 in conventional SPH).
+    pub correction_fallbacks: u64,
     /// Simulated time reached (s).
     pub end_time: f64,
     /// Largest |E(t) − E(0)| over the run divided by the largest energy in play,

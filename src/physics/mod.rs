@@ -18,6 +18,7 @@ pub mod artificial_stress;
 pub mod correction;
 pub mod viscosity;
 
+use crate::case::Formulation;
 use crate::contact::colour::{self, ColourLaw, ColourState};
 use crate::contact::{self, ContactLaw, ContactParams};
 use crate::kernel::Kernel;
@@ -90,6 +91,8 @@ pub struct Model<const D: usize> {
     pub h_max_ratio: f64,
     /// The colour contact law's tables, where a pair of bodies uses it.
     pub colour: Option<ColourLaw>,
+    /// Conventional SPH, or CN-SPH's corrected gradients.
+    pub formulation: Formulation,
 }
 
 impl<const D: usize> Model<D> {
@@ -131,6 +134,19 @@ pub fn colour_states<const D: usize, K: Kernel>(
     }
 }
 
+/// CN-SPH's gradient correction of every real particle (see [`correction`]), over its own
+/// body and the bodies welded to it; returns how many kept the uncorrected gradient.
+pub fn corrections<const D: usize, K: Kernel>(
+    kernel: K,
+    p: &Particles<D>,
+    nl: &NeighborList,
+    model: &Model<D>,
+    out: &mut Vec<correction::Correction<D>>,
+) -> usize {
+    let joined = |a: u32, b: u32| a == b || matches!(model.pairs.rule(a, b), PairRule::Conserve);
+    correction::corrections(kernel, p, nl, joined, out)
+}
+
 /// Rates of change and per-particle diagnostics of one real particle, from one pass.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct ParticleRates<const D: usize> {
@@ -169,6 +185,19 @@ pub struct Rates<const D: usize> {
     /// Per-particle artificial stress R (all particles, ghosts included, and a zero at the end
     /// for the padding; empty when no material uses it).
     art: Vec<Tensor<D>>,
+    /// Per-particle gradient correction B (CN-SPH; ghosts included, the identity for the
+    /// padding; empty in conventional SPH).
+    corr: Vec<Tensor<D>>,
+}
+
+/// What the pass reads besides the particle's own neighbour list.
+#[derive(Clone, Copy)]
+struct Pass<'a, const D: usize> {
+    gather: &'a [Gather<D>],
+    art: &'a [Tensor<D>],
+    corr: &'a [Tensor<D>],
+    colour: &'a [ColourState],
+    model: &'a Model<D>,
 }
 
 /// Neighbours go through the conservation equations this many at a time, one lane each: the
@@ -260,16 +289,18 @@ fn dot<const D: usize>(a: &[f64; D], b: &[f64; D]) -> f64 {
 /// Evaluate all rates at the particles' current state (positions, velocities `p.v`, stress).
 ///
 /// `colour` holds the colour-law state of every particle, ghosts included (see
-/// [`colour::states`]); it may be empty when no pair of bodies uses the colour law.
+/// [`colour::states`]); it may be empty when no pair of bodies uses the colour law. `corr`
+/// holds CN-SPH's gradient correction B of every particle, ghosts included (see
+/// [`correction`]); empty: conventional SPH.
 pub fn compute_rates<const D: usize, K: Kernel>(
     kernel: K,
     p: &Particles<D>,
     nl: &NeighborList,
     model: &Model<D>,
-    colour: &[ColourState],
+    (colour, corr): (&[ColourState], &[Tensor<D>]),
     out: &mut Rates<D>,
 ) {
-    compute_rates_on(kernel, p, nl, model, colour, out, wide_lanes());
+    compute_rates_on(kernel, p, nl, model, (colour, corr), out, wide_lanes());
 }
 
 /// [`compute_rates`], on 256-bit vectors (`wide`, where [`wide_lanes`]) or portable code.
@@ -278,7 +309,7 @@ fn compute_rates_on<const D: usize, K: Kernel>(
     p: &Particles<D>,
     nl: &NeighborList,
     model: &Model<D>,
-    colour: &[ColourState],
+    (colour, corr): (&[ColourState], &[Tensor<D>]),
     out: &mut Rates<D>,
     wide: bool,
 ) {
@@ -323,42 +354,52 @@ fn compute_rates_on<const D: usize, K: Kernel>(
         }));
         out.art.push(Tensor::<D>::zeros());
     }
-    let (gather, art) = (&out.gather, &out.art);
+    out.corr.clear();
+    let cn = !corr.is_empty();
+    if cn {
+        assert_eq!(
+            corr.len(),
+            all,
+            "a correction for every particle, ghosts included"
+        );
+        out.corr.extend_from_slice(corr);
+        out.corr.push(Tensor::<D>::identity());
+    }
+    let pass = Pass {
+        gather: &out.gather,
+        art: &out.art,
+        corr: &out.corr,
+        colour,
+        model,
+    };
     assert!(
         !wide || wide_lanes(),
         "AVX2 pass asked for on a CPU without AVX2"
     );
+    // One monomorphised pass per (artificial stress, CN-SPH) combination, on AVX2 or portable.
+    macro_rules! run {
+        ($art:literal, $cn:literal) => {
+            out.particles
+                .par_extend((0..p.n_real).into_par_iter().map(|i| {
+                    let list = &nl.lists[i];
+                    #[cfg(target_arch = "x86_64")]
+                    if wide {
+                        // SAFETY: the CPU has AVX2 (asserted above).
+                        return unsafe {
+                            particle_rates_avx2::<D, K, $art, $cn>(kernel, i, list, &pass)
+                        };
+                    }
+                    particle_rates::<D, K, $art, $cn>(kernel, i, list, &pass)
+                }))
+        };
+    }
     out.particles.clear();
-    out.particles
-        .par_extend((0..p.n_real).into_par_iter().map(|i| {
-            let list = &nl.lists[i];
-            match (wide, any_art) {
-                #[cfg(target_arch = "x86_64")]
-                (true, false) => {
-                    // SAFETY: the CPU has AVX2 (asserted above).
-                    unsafe {
-                        particle_rates_avx2::<D, K, false>(
-                            kernel, i, list, gather, art, model, colour,
-                        )
-                    }
-                }
-                #[cfg(target_arch = "x86_64")]
-                (true, true) => {
-                    // SAFETY: as above.
-                    unsafe {
-                        particle_rates_avx2::<D, K, true>(
-                            kernel, i, list, gather, art, model, colour,
-                        )
-                    }
-                }
-                (_, false) => {
-                    particle_rates::<D, K, false>(kernel, i, list, gather, art, model, colour)
-                }
-                (_, true) => {
-                    particle_rates::<D, K, true>(kernel, i, list, gather, art, model, colour)
-                }
-            }
-        }));
+    match (any_art, cn) {
+        (false, false) => run!(false, false),
+        (true, false) => run!(true, false),
+        (false, true) => run!(false, true),
+        (true, true) => run!(true, true),
+    }
 }
 
 /// Whether the CPU has 256-bit vectors (AVX2), so that the pass can run its `LANES` lanes in
@@ -378,16 +419,13 @@ fn wide_lanes() -> bool {
 /// [`particle_rates`] compiled for AVX2.
 #[cfg(target_arch = "x86_64")]
 #[target_feature(enable = "avx2")]
-fn particle_rates_avx2<const D: usize, K: Kernel, const ART: bool>(
+fn particle_rates_avx2<const D: usize, K: Kernel, const ART: bool, const CN: bool>(
     kernel: K,
     i: usize,
     neighbors: &[u32],
-    gather: &[Gather<D>],
-    art: &[Tensor<D>],
-    model: &Model<D>,
-    colour: &[ColourState],
+    pass: &Pass<D>,
 ) -> ParticleRates<D> {
-    particle_rates::<D, K, ART>(kernel, i, neighbors, gather, art, model, colour)
+    particle_rates::<D, K, ART, CN>(kernel, i, neighbors, pass)
 }
 
 /// The conservation sums of one particle, one accumulator per lane (added up in lane order at
@@ -433,15 +471,18 @@ fn lane_max(a: &[f64; LANES]) -> f64 {
 /// branch, for the conservation equations, which [`conserve_chunk`] evaluates `LANES` at a
 /// time. The last chunk is filled up with the padding record.
 #[inline(always)]
-fn particle_rates<const D: usize, K: Kernel, const ART: bool>(
+fn particle_rates<const D: usize, K: Kernel, const ART: bool, const CN: bool>(
     kernel: K,
     i: usize,
     neighbors: &[u32],
-    gather: &[Gather<D>],
-    art: &[Tensor<D>],
-    model: &Model<D>,
-    colour: &[ColourState],
+    pass: &Pass<D>,
 ) -> ParticleRates<D> {
+    let Pass {
+        gather,
+        colour,
+        model,
+        ..
+    } = *pass;
     let gi = &gather[i];
     let (xi, hi, bi) = (gi.x, gi.h, gi.body);
     let padding = (gather.len() - 1) as u32;
@@ -578,7 +619,7 @@ fn particle_rates<const D: usize, K: Kernel, const ART: bool>(
         queued += inside as usize;
         if queued == BATCH {
             for chunk in queue.chunks_exact(LANES) {
-                conserve_chunk::<D, K, ART>(kernel, i, chunk, gather, art, model, &mut sums);
+                conserve_chunk::<D, K, ART, CN>(kernel, i, chunk, pass, &mut sums);
             }
             count += BATCH as u32;
             queued = 0;
@@ -588,7 +629,7 @@ fn particle_rates<const D: usize, K: Kernel, const ART: bool>(
     let used = queued.div_ceil(LANES) * LANES;
     queue[queued..used].fill(padding);
     for chunk in queue[..used].chunks_exact(LANES) {
-        conserve_chunk::<D, K, ART>(kernel, i, chunk, gather, art, model, &mut sums);
+        conserve_chunk::<D, K, ART, CN>(kernel, i, chunk, pass, &mut sums);
     }
 
     if let Some(own) = colour.get(i) {
@@ -634,15 +675,20 @@ fn particle_rates<const D: usize, K: Kernel, const ART: bool>(
 /// the support, which zeroes every term of the padding record), so that it vectorises.
 #[inline(always)]
 #[allow(clippy::needless_range_loop)] // index loops over lanes and axes read as the equations
-fn conserve_chunk<const D: usize, K: Kernel, const ART: bool>(
+fn conserve_chunk<const D: usize, K: Kernel, const ART: bool, const CN: bool>(
     kernel: K,
     i: usize,
     js: &[u32],
-    gather: &[Gather<D>],
-    art: &[Tensor<D>],
-    model: &Model<D>,
+    pass: &Pass<D>,
     s: &mut LaneSums<D>,
 ) {
+    let Pass {
+        gather,
+        art,
+        corr,
+        model,
+        ..
+    } = *pass;
     let gi = &gather[i];
     let g: [&Gather<D>; LANES] = std::array::from_fn(|l| &gather[js[l] as usize]);
     let (alpha, beta) = (model.alpha, model.beta);
@@ -654,16 +700,27 @@ fn conserve_chunk<const D: usize, K: Kernel, const ART: bool>(
         let r = r2.sqrt();
         let gf = kernel.grad_factor::<D>(r, hij);
         let grad: [f64; D] = std::array::from_fn(|k| xij[k] * gf);
+        // CN-SPH: i's equations use ∇̃_i W_ij = B_i ∇_i W_ij, and the pair force is built from
+        // both sides, B_i ∇_i W_ij and −∇̃_j W_ji = B_j ∇_i W_ij, so that it is antisymmetric.
+        let (grad_i, grad_j) = if CN {
+            let (bi, bj) = (&corr[i], &corr[js[l] as usize]);
+            let apply = |b: &Tensor<D>| -> [f64; D] {
+                std::array::from_fn(|a| (0..D).map(|c| b[(a, c)] * grad[c]).sum())
+            };
+            (apply(bi), apply(bj))
+        } else {
+            (grad, grad)
+        };
         let vij: [f64; D] = std::array::from_fn(|k| gi.v[k] - gj.v[k]);
         let near = r < 2.0 * hij;
         let v2 = if near { dot(&vij, &vij) } else { 0.0 };
         s.v2_max[l] = s.v2_max[l].max(v2);
         let mj = gj.m;
-        s.drho[l] += mj * dot(&vij, &grad);
+        s.drho[l] += mj * dot(&vij, &grad_i);
         for a in 0..D {
             let va = vij[a] * gj.vol;
             for b in 0..D {
-                s.grad_v[a][b][l] -= va * grad[b];
+                s.grad_v[a][b][l] -= va * grad_i[b];
             }
         }
         let (pi, mu) = viscosity::monaghan_gingold(
@@ -677,22 +734,35 @@ fn conserve_chunk<const D: usize, K: Kernel, const ART: bool>(
         );
         let mu = if near { mu } else { 0.0 };
         s.mu_max[l] = s.mu_max[l].max(-mu);
-        // T_ij ∇W = (σ_i/ρ_i² + σ_j/ρ_j²) ∇W − Π_ij ∇W (+ A_ij ∇W).
+        // T_ij ∇W = (σ_i/ρ_i² + σ_j/ρ_j²) ∇W − Π_ij ∇W (+ A_ij ∇W); in CN-SPH
+        // σ_i/ρ_i² ∇̃_i + σ_j/ρ_j² ∇̃_j, and Π_ij on their mean.
         let mut tg: [f64; D] = std::array::from_fn(|a| {
-            let mut t = -pi * grad[a];
-            for (b, gb) in grad.iter().enumerate() {
-                t += (gi.sr2[sym(a, b)] + gj.sr2[sym(a, b)]) * gb;
+            let mut t = if CN {
+                -pi * 0.5 * (grad_i[a] + grad_j[a])
+            } else {
+                -pi * grad[a]
+            };
+            for b in 0..D {
+                t += if CN {
+                    gi.sr2[sym(a, b)] * grad_i[b] + gj.sr2[sym(a, b)] * grad_j[b]
+                } else {
+                    (gi.sr2[sym(a, b)] + gj.sr2[sym(a, b)]) * grad[b]
+                };
             }
             t
         });
         if ART {
-            let r_ij = art[i] + art[js[l] as usize];
+            let (ri, rj) = (&art[i], &art[js[l] as usize]);
             let dp = 0.5 * (gi.dp + gj.dp);
             let f = kernel.w::<D>(r, hij) / kernel.w::<D>(dp, hij);
             let fa = f.powi(artificial_stress::EXPONENT);
             for a in 0..D {
                 for b in 0..D {
-                    tg[a] += r_ij[(a, b)] * fa * grad[b];
+                    tg[a] += if CN {
+                        (ri[(a, b)] * grad_i[b] + rj[(a, b)] * grad_j[b]) * fa
+                    } else {
+                        (ri[(a, b)] + rj[(a, b)]) * fa * grad[b]
+                    };
                 }
             }
         }
@@ -783,8 +853,24 @@ type = "welded"
             states.iter().any(|s| s.coef > 0.0),
             "the colour law is at work"
         );
-        compute_rates_on(CubicSpline, &p, &nl, &model, &states, &mut wide, true);
-        compute_rates_on(CubicSpline, &p, &nl, &model, &states, &mut portable, false);
+        compute_rates_on(
+            CubicSpline,
+            &p,
+            &nl,
+            &model,
+            (&states, &[]),
+            &mut wide,
+            true,
+        );
+        compute_rates_on(
+            CubicSpline,
+            &p,
+            &nl,
+            &model,
+            (&states, &[]),
+            &mut portable,
+            false,
+        );
         assert!(wide.particles.iter().any(|r| r.contact_force.norm() > 0.0));
         assert!(wide
             .particles
@@ -793,6 +879,63 @@ type = "welded"
         for (i, (a, b)) in wide.particles.iter().zip(&portable.particles).enumerate() {
             assert_eq!(a, b, "particle {i}");
         }
+    }
+
+    /// CN-SPH through the pass: a linear velocity field v = G x gives L = G to round-off at
+    /// every particle of a block, faces and corners included, on a perturbed lattice; the
+    /// conventional pass is off at the surface. Forces stay antisymmetric: Σ m a = 0.
+    #[test]
+    fn corrected_pass_reproduces_a_linear_velocity_field() {
+        let deck = r#"
+[simulation]
+dimension = 2
+end_time = 1.0
+[materials.al]
+density = 2700.0
+eos = { type = "linear" }
+strength = { type = "elastic", youngs_modulus = 68.9e9, poissons_ratio = 0.33 }
+[[body]]
+name = "block"
+material = "al"
+spacing = 1.0e-3
+shape = { type = "rectangle", min = [0.0, 0.0], max = [8.0e-3, 6.0e-3] }
+"#;
+        let case = crate::deck::parse(deck, "linear.toml").unwrap();
+        let (mut p, model) = crate::setup::build::<2>(&case).unwrap();
+        let g = Tensor::<2>::new(30.0, -12.0, 7.0, -21.0);
+        let mut seed = 7u64;
+        for i in 0..p.n_real {
+            for k in 0..2 {
+                seed = seed.wrapping_mul(6364136223846793005).wrapping_add(1);
+                p.x[i][k] += 2e-4 * ((seed >> 11) as f64 / (1u64 << 53) as f64 - 0.5);
+            }
+            p.v[i] = g * p.x[i];
+            p.p[i] = 1e6 * p.x[i][0];
+        }
+        let mut nl = NeighborList::default();
+        nl.build(&p.x, &p.h, p.n_real, 0.0);
+        let mut c = Vec::new();
+        assert_eq!(corrections(CubicSpline, &p, &nl, &model, &mut c), 0);
+        let b: Vec<Tensor<2>> = c.iter().map(|c| c.b).collect();
+        let (mut cn, mut plain) = (Rates::default(), Rates::default());
+        compute_rates(CubicSpline, &p, &nl, &model, (&[], &b), &mut cn);
+        compute_rates(CubicSpline, &p, &nl, &model, (&[], &[]), &mut plain);
+        let worst = |r: &Rates<2>| {
+            r.particles
+                .iter()
+                .map(|x| (x.grad_v - g).norm() / g.norm())
+                .fold(0.0, f64::max)
+        };
+        assert!(worst(&cn) < 1e-12, "CN-SPH: {}", worst(&cn));
+        assert!(worst(&plain) > 0.3, "conventional: {}", worst(&plain));
+        let force: Vector<2> = (0..p.n_real).map(|i| cn.particles[i].acc * p.m[i]).sum();
+        let scale: f64 = (0..p.n_real)
+            .map(|i| (cn.particles[i].acc * p.m[i]).norm())
+            .sum();
+        assert!(
+            force.norm() < 1e-12 * scale,
+            "net force {force:?} of {scale}"
+        );
     }
 
     /// Bodies closing on each other through the contact bound the time step by their relative
@@ -833,7 +976,7 @@ stiffness = 1.0
         let mut nl = NeighborList::default();
         nl.build(&p.x, &p.h, p.n_real, 0.0);
         let mut rates = Rates::default();
-        compute_rates(CubicSpline, &p, &nl, &model, &[], &mut rates);
+        compute_rates(CubicSpline, &p, &nl, &model, (&[], &[]), &mut rates);
         let c = p.c[0];
         let expect = model.cfl * p.h[0] / (c + 1000.0 + 0.6 * model.alpha * c);
         assert!(rates.particles[0].neighbors == 1);

@@ -70,6 +70,7 @@ pub fn build<const D: usize>(case: &Case) -> Result<(Particles<D>, Model<D>)> {
         h_min_ratio: s.h_min_ratio,
         h_max_ratio: s.h_max_ratio,
         colour: None,
+        formulation: s.formulation,
     };
     let mut model = model;
     if model
