@@ -13,6 +13,16 @@
 //!
 //! N_i are neighbours of the same body or of a `welded` body; C_i, neighbours of a body in
 //! `contact`, enter only through [`crate::contact`] (the paper's W = 0 across bodies).
+//!
+//! **CN-SPH** (`formulation = "corrected"`): with the corrections B_i of [`correction`], i's
+//! continuity and velocity gradient use ∇̃_i W_ij = B_i ∇_i W_ij (so a linear velocity field
+//! gives its exact L, at a surface too), and the pair force is built from both sides,
+//! T_ij ∇W → (σ_i/ρ_i²) B_i ∇_i W_ij + (σ_j/ρ_j²) B_j ∇_i W_ij − Π_ij ½(B_i + B_j) ∇_i W_ij,
+//! antisymmetric in i and j: linear momentum is conserved to round-off (3e-15 in the elastic
+//! impact), and the pairwise energy equation on the same force keeps the total energy's
+//! discretisation error to the time integration's (0.81 % drift in the elastic impact at
+//! CFL 0.3, conventional 0.73 %). Angular momentum is not conserved exactly in either
+//! formulation. The contact is the same in both (not yet with the corrected gradient).
 
 pub mod artificial_stress;
 pub mod correction;
