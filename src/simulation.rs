@@ -4,7 +4,7 @@
 use crate::boundary;
 use crate::boundary::Plane;
 use crate::case::{Case, Formulation, KernelKind};
-use crate::contact::colour::ColourState;
+use crate::contact::colour::{self, ColourState};
 use crate::error::{Error, Result};
 use crate::integrate;
 use crate::kernel::{CubicSpline, WendlandC2};
@@ -76,6 +76,8 @@ pub struct Simulation<const D: usize> {
     /// CN-SPH: each particle's correction, and B of every particle, ghosts included.
     corrections: Vec<physics::correction::Correction<D>>,
     corr: Vec<Tensor<D>>,
+    /// CN-SPH: the surface indicator λ_min of every particle, ghosts included.
+    lambda: Vec<f64>,
 }
 
 /// The scalar state of a run in progress, beside its particles: what a checkpoint keeps.
@@ -221,6 +223,7 @@ impl<const D: usize> Simulation<D> {
             h_search: Vec::new(),
             corrections: Vec::new(),
             corr: Vec::new(),
+            lambda: Vec::new(),
         })
     }
 
@@ -295,29 +298,12 @@ impl<const D: usize> Simulation<D> {
             self.neighbors.classify(&p.body, false);
             self.stats.searches += 1;
         }
-        // The colour contact law needs every particle's colour state first.
-        self.colour.clear();
-        if self.model.colour.is_some() {
-            let (nl, model) = (&self.neighbors, &self.model);
-            match self.kernel {
-                KernelKind::CubicSpline => {
-                    physics::colour_states(CubicSpline, p, nl, model, &mut self.colour)
-                }
-                KernelKind::WendlandC2 => {
-                    physics::colour_states(WendlandC2, p, nl, model, &mut self.colour)
-                }
-            }
-            // A ghost's state is its source's, with the normal mirrored.
-            self.ghosts
-                .extend_to_ghosts_with(&mut self.colour, &self.symmetry, |mut s, axis| {
-                    s.normal[axis] = -s.normal[axis];
-                    s
-                });
-        }
         // CN-SPH: the gradient corrections, in their own pass before the rates.
         self.corr.clear();
+        self.lambda.clear();
         let mut fallbacks = 0;
-        if self.model.formulation == Formulation::Corrected {
+        let cn = self.model.formulation == Formulation::Corrected;
+        if cn {
             let (nl, model, out) = (&self.neighbors, &self.model, &mut self.corrections);
             fallbacks = match self.kernel {
                 KernelKind::CubicSpline => physics::corrections(CubicSpline, p, nl, model, out),
@@ -325,6 +311,10 @@ impl<const D: usize> Simulation<D> {
             };
             self.stats.correction_fallbacks += fallbacks as u64;
             self.corr.extend(self.corrections.iter().map(|c| c.b));
+            self.lambda
+                .extend(self.corrections.iter().map(|c| c.lambda_min));
+            self.ghosts
+                .extend_to_ghosts_with(&mut self.lambda, &self.symmetry, |l, _| l);
             // A ghost's B is its source's seen in the mirror: M B M, M = I − 2 e_a e_aᵀ.
             self.ghosts
                 .extend_to_ghosts_with(&mut self.corr, &self.symmetry, |mut b, axis| {
@@ -335,6 +325,30 @@ impl<const D: usize> Simulation<D> {
                         }
                     }
                     b
+                });
+        }
+        // The colour contact law (and CN-SPH's contact normal) needs every particle's colour
+        // state first.
+        self.colour.clear();
+        if physics::needs_colour_states(&self.model) {
+            let (nl, model) = (&self.neighbors, &self.model);
+            let surfaces = cn.then_some(colour::Surfaces {
+                lambda: &self.lambda,
+                b: &self.corr,
+            });
+            match self.kernel {
+                KernelKind::CubicSpline => {
+                    physics::colour_states(CubicSpline, p, nl, model, surfaces, &mut self.colour)
+                }
+                KernelKind::WendlandC2 => {
+                    physics::colour_states(WendlandC2, p, nl, model, surfaces, &mut self.colour)
+                }
+            }
+            // A ghost's state is its source's, with the normal mirrored.
+            self.ghosts
+                .extend_to_ghosts_with(&mut self.colour, &self.symmetry, |mut s, axis| {
+                    s.normal[axis] = -s.normal[axis];
+                    s
                 });
         }
         let (nl, model) = (&self.neighbors, &self.model);

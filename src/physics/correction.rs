@@ -5,6 +5,8 @@
 //! - **Shepard normalisation.** S_i = Σ_j V_j W_ij (i itself included): the paper's shape
 //!   function N_ij = V_j W_ij / S_i sums to one, so a constant field is interpolated exactly,
 //!   also at a free surface where S_i falls to about ½ (a face) or less (an edge, a corner).
+//!   No step needs it ([`shepard`]): strike never interpolates a field with the kernel (the
+//!   density comes from the continuity equation), only its gradients.
 //! - **First-order corrected gradient** (Randles & Libersky 1996; Bonet & Lok 1999):
 //!   A_i = Σ_j V_j ∇_i W_ij ⊗ x_ji, B_i = A_i⁻¹ and ∇̃_i W_ij = B_i ∇_i W_ij. Then
 //!   Σ_j V_j (f_j − f_i) ∇̃_i W_ij = B_i A_i ∇f = ∇f for any linear field f, at a surface too.
@@ -12,7 +14,7 @@
 //!
 //! A_i is near-singular where a particle's neighbours lie on a line or a plane (a filament, a
 //! lone particle): there the uncorrected gradient is kept (B_i = I) and the particle counted.
-//! The test is the smallest eigenvalue λ_min of A_i's symmetric part, which is also the
+//! The test is the smallest eigenvalue λ_min of A_i (symmetric: ∇W is radial), which is also the
 //! surface indicator of DESIGN.md §6. Measured with the cubic spline at h = 1.2 Δp: 0.99 /
 //! 0.98 inside (2D / 3D), 0.50 / 0.49 at a face, 0.29 / 0.23 at a corner, down to 0.19 at a
 //! corner of a lattice perturbed by ±0.2 Δp; 0 for a lone particle or a line of particles.
@@ -24,26 +26,44 @@ use crate::neighbors::NeighborList;
 use crate::particles::{Particles, Tensor};
 use rayon::prelude::*;
 
-/// Below this smallest eigenvalue of sym(A_i) the correction is not applied (see the module
+/// Below this smallest eigenvalue of A_i the correction is not applied (see the module
 /// doc).
 pub const LAMBDA_MIN: f64 = 0.05;
+
+/// At or above this λ_min a particle is inside its body, below it on its surface: measured on
+/// a face of a lattice perturbed by up to ±0.2 Δp, the surface layer reads 0.42–0.55 and the
+/// layer beneath it 0.80–0.97 (cubic spline, h = 1.2 Δp, 3D).
+pub const LAMBDA_SURFACE: f64 = 0.7;
 
 /// A particle's corrections.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct Correction<const D: usize> {
     /// B_i: multiplies ∇_i W_ij (the identity where the correction is not applied).
     pub b: Tensor<D>,
-    /// Shepard sum S_i = Σ_j V_j W_ij, i included.
-    pub shepard: f64,
-    /// Smallest eigenvalue of sym(A_i): the surface indicator.
+    /// Smallest eigenvalue of A_i: the surface indicator.
     pub lambda_min: f64,
     /// Whether A_i was too near singular and the uncorrected gradient is kept.
     pub fallback: bool,
 }
 
+/// Neighbours are summed this many at a time, one lane each, with no branch, so that the sums
+/// vectorise; the lanes are added up in lane order, the same on every machine.
+const LANES: usize = 4;
+
+/// What the pass reads of a neighbour, in one record.
+#[derive(Clone, Copy)]
+struct Point<const D: usize> {
+    x: [f64; D],
+    h: f64,
+    vol: f64,
+    body: u32,
+}
+
 /// The corrections of every real particle (`out[i]`), from its neighbours of bodies `joined`
 /// to its own (the body itself, and welded bodies). Returns how many fell back to the
 /// uncorrected gradient.
+///
+/// ∇_i W_ij is radial, so A_i = −Σ_j V_j (1/r dW/dr) x_ij ⊗ x_ij is symmetric: six sums in 3D.
 pub fn corrections<const D: usize, K: Kernel>(
     kernel: K,
     p: &Particles<D>,
@@ -51,44 +71,187 @@ pub fn corrections<const D: usize, K: Kernel>(
     joined: impl Fn(u32, u32) -> bool + Sync,
     out: &mut Vec<Correction<D>>,
 ) -> usize {
+    let mut points: Vec<Point<D>> = Vec::with_capacity(p.len() + 1);
+    points.par_extend((0..p.len()).into_par_iter().map(|j| Point {
+        x: std::array::from_fn(|a| p.x[j][a]),
+        h: p.h[j],
+        vol: p.volume(j),
+        body: p.body[j],
+    }));
+    // Fills the last chunk: far beyond every support, so that its terms are exactly zero.
+    points.push(Point {
+        x: [1e100; D],
+        h: 0.0,
+        vol: 0.0,
+        body: u32::MAX,
+    });
+    let points = &points[..];
+    let wide = crate::physics::wide_lanes();
     out.clear();
     out.par_extend((0..p.n_real).into_par_iter().map(|i| {
-        let mut a = Tensor::<D>::zeros();
-        let mut shepard = p.volume(i) * kernel.w::<D>(0.0, p.h[i]);
-        for &j in &nl.lists[i] {
-            let j = j as usize;
-            if !joined(p.body[i], p.body[j]) {
-                continue;
-            }
-            let xij = p.x[i] - p.x[j];
-            let r = xij.norm();
-            let hij = 0.5 * (p.h[i] + p.h[j]);
-            if r >= 2.0 * hij || r == 0.0 {
-                continue;
-            }
-            let vol = p.volume(j);
-            shepard += vol * kernel.w::<D>(r, hij);
-            let grad = xij * (kernel.dw::<D>(r, hij) / r);
-            a -= grad * xij.transpose() * vol;
+        // Particles with no neighbour of another body (see `NeighborList::classify`) need no
+        // check of the pair's bodies.
+        let mixed = nl.mixed.get(i).copied().unwrap_or(true);
+        let list = &nl.lists[i];
+        #[cfg(target_arch = "x86_64")]
+        if wide {
+            // SAFETY: the CPU has AVX2 (checked above).
+            return unsafe { correction_avx2(kernel, i, list, points, mixed, &joined) };
         }
-        let lambda_min = min_eigenvalue(&(0.5 * (a + a.transpose())));
+        correction(kernel, i, list, points, mixed, &joined)
+    }));
+    out.iter().filter(|c| c.fallback).count()
+}
+
+/// [`correction`] compiled for AVX2 (bit-identical: see `physics::wide_lanes`).
+#[cfg(target_arch = "x86_64")]
+#[target_feature(enable = "avx2")]
+fn correction_avx2<const D: usize, K: Kernel>(
+    kernel: K,
+    i: usize,
+    list: &[u32],
+    points: &[Point<D>],
+    mixed: bool,
+    joined: &impl Fn(u32, u32) -> bool,
+) -> Correction<D> {
+    correction(kernel, i, list, points, mixed, joined)
+}
+
+/// Particle i's correction from its neighbour list (`mixed`: it has neighbours of other
+/// bodies, of which only those `joined` to its own count).
+#[inline(always)]
+fn correction<const D: usize, K: Kernel>(
+    kernel: K,
+    i: usize,
+    list: &[u32],
+    points: &[Point<D>],
+    mixed: bool,
+    joined: &impl Fn(u32, u32) -> bool,
+) -> Correction<D> {
+    {
+        let sums = if mixed {
+            moments::<D, K, true>(kernel, i, list, points, joined)
+        } else {
+            moments::<D, K, false>(kernel, i, list, points, joined)
+        };
+        let mut a = Tensor::<D>::zeros();
+        for (k, &(r, c)) in SYM.iter().enumerate() {
+            if r < D && c < D {
+                let v: f64 = sums[k].iter().sum();
+                a[(r, c)] = v;
+                a[(c, r)] = v;
+            }
+        }
+        let lambda_min = min_eigenvalue(&a);
         let inverse = (lambda_min >= LAMBDA_MIN)
             .then(|| a.try_inverse())
             .flatten()
             .filter(|b| b.iter().all(|x| x.is_finite()));
         Correction {
             b: inverse.unwrap_or_else(Tensor::<D>::identity),
-            shepard,
             lambda_min,
             fallback: inverse.is_none(),
         }
-    }));
-    out.iter().filter(|c| c.fallback).count()
+    }
+}
+
+/// −Σ_j V_j (1/r dW/dr) x_ij ⊗ x_ij over i's list (`CHECK`: only neighbours of bodies joined
+/// to i's), its symmetric components per lane.
+#[inline(always)]
+fn moments<const D: usize, K: Kernel, const CHECK: bool>(
+    kernel: K,
+    i: usize,
+    list: &[u32],
+    points: &[Point<D>],
+    joined: &impl Fn(u32, u32) -> bool,
+) -> [[f64; LANES]; 6] {
+    let padding = (points.len() - 1) as u32;
+    let mut sums = [[0.0; LANES]; 6];
+    let mut chunks = list.chunks_exact(LANES);
+    for chunk in chunks.by_ref() {
+        let js: [u32; LANES] = std::array::from_fn(|l| chunk[l]);
+        lanes::<D, K, CHECK>(kernel, i, &js, points, joined, &mut sums);
+    }
+    let rest = chunks.remainder();
+    if !rest.is_empty() {
+        let js: [u32; LANES] = std::array::from_fn(|l| rest.get(l).copied().unwrap_or(padding));
+        lanes::<D, K, CHECK>(kernel, i, &js, points, joined, &mut sums);
+    }
+    sums
+}
+
+/// One chunk of [`moments`]: straight-line arithmetic over the lanes, with selects only, so
+/// that it vectorises.
+#[inline(always)]
+fn lanes<const D: usize, K: Kernel, const CHECK: bool>(
+    kernel: K,
+    i: usize,
+    js: &[u32; LANES],
+    points: &[Point<D>],
+    joined: &impl Fn(u32, u32) -> bool,
+    sums: &mut [[f64; LANES]; 6],
+) {
+    let pi = &points[i];
+    let padding = points.len() - 1;
+    let pj: [&Point<D>; LANES] = std::array::from_fn(|l| &points[js[l] as usize]);
+    let keep: [f64; LANES] = std::array::from_fn(|l| {
+        let ok = !CHECK || (js[l] as usize != padding && joined(pi.body, pj[l].body));
+        if ok {
+            1.0
+        } else {
+            0.0
+        }
+    });
+    for l in 0..LANES {
+        let xij: [f64; D] = std::array::from_fn(|a| pi.x[a] - pj[l].x[a]);
+        let r2: f64 = xij.iter().map(|x| x * x).sum();
+        // A coincident neighbour (r = 0) has no direction and adds nothing.
+        let r = if r2 > 0.0 { r2.sqrt() } else { 1e100 };
+        let gf = kernel.grad_factor::<D>(r, 0.5 * (pi.h + pj[l].h));
+        let w = -pj[l].vol * gf * keep[l];
+        for (k, &(a, b)) in SYM.iter().enumerate() {
+            if a < D && b < D {
+                sums[k][l] += w * xij[a] * xij[b];
+            }
+        }
+    }
+}
+
+/// The symmetric components summed: the diagonal, then xy, xz, yz.
+const SYM: [(usize, usize); 6] = [(0, 0), (1, 1), (2, 2), (0, 1), (0, 2), (1, 2)];
+
+/// The Shepard sum S_i = Σ_j V_j W_ij (i itself included) over the neighbours of bodies
+/// `joined` to i's: the denominator of the paper's shape function N_ij = V_j W_ij / S_i, which
+/// interpolates a constant exactly, at a surface too (see the module doc).
+pub fn shepard<const D: usize, K: Kernel>(
+    kernel: K,
+    p: &Particles<D>,
+    nl: &NeighborList,
+    joined: impl Fn(u32, u32) -> bool + Sync,
+) -> Vec<f64> {
+    (0..p.n_real)
+        .into_par_iter()
+        .map(|i| {
+            let mut s = p.volume(i) * kernel.w::<D>(0.0, p.h[i]);
+            for &j in &nl.lists[i] {
+                let j = j as usize;
+                if !joined(p.body[i], p.body[j]) {
+                    continue;
+                }
+                let r = (p.x[i] - p.x[j]).norm();
+                let hij = 0.5 * (p.h[i] + p.h[j]);
+                if r > 0.0 && r < 2.0 * hij {
+                    s += p.volume(j) * kernel.w::<D>(r, hij);
+                }
+            }
+            s
+        })
+        .collect()
 }
 
 /// The smallest eigenvalue of a symmetric D × D matrix, D ≤ 3, in closed form (the
 /// trigonometric solution of the characteristic cubic in 3D; Smith 1961).
-fn min_eigenvalue<const D: usize>(m: &Tensor<D>) -> f64 {
+pub fn min_eigenvalue<const D: usize>(m: &Tensor<D>) -> f64 {
     match D {
         1 => m[(0, 0)],
         2 => {
@@ -112,6 +275,71 @@ fn min_eigenvalue<const D: usize>(m: &Tensor<D>) -> f64 {
             q + 2.0 * pp * (phi + 2.0 * std::f64::consts::PI / 3.0).cos()
         }
     }
+}
+
+/// The unit normal of the plane that best fits a weighted set of points (least squares), from
+/// their moments about any origin: w = Σ w_k, m = Σ w_k d_k, s = Σ w_k d_k ⊗ d_k. It is the
+/// eigenvector of the smallest eigenvalue of the scatter matrix C = s − m ⊗ m / w; None where
+/// the points do not lie near a plane (fewer than D of them, or that eigenvalue above a fifth
+/// of the mean of the others: an edge or a corner of a body) or near a line. Its sign is
+/// arbitrary.
+pub fn plane_normal<const D: usize>(
+    count: usize,
+    w: f64,
+    m: &[f64; D],
+    s: &Tensor<D>,
+) -> Option<[f64; D]> {
+    if count < D || w <= 0.0 {
+        return None;
+    }
+    let c = Tensor::<D>::from_fn(|a, b| s[(a, b)] - m[a] * m[b] / w);
+    let lambda = min_eigenvalue(&c);
+    let others = (c.trace() - lambda) / (D - 1).max(1) as f64;
+    if others.is_nan() || others <= 0.0 || lambda > 0.2 * others {
+        return None;
+    }
+    // The null direction of C − λI: in 2D perpendicular to its larger row, in 3D the largest
+    // cross product of two of its rows.
+    let k = c - Tensor::<D>::identity() * lambda;
+    let mut best = [0.0; D];
+    let mut best2 = 0.0;
+    let mut consider = |v: [f64; D]| {
+        let n2: f64 = v.iter().map(|x| x * x).sum();
+        if n2 > best2 {
+            best = v;
+            best2 = n2;
+        }
+    };
+    match D {
+        1 => consider(std::array::from_fn(|_| 1.0)),
+        2 => {
+            for a in 0..2 {
+                consider(std::array::from_fn(|b| {
+                    if b == 0 {
+                        -k[(a, 1)]
+                    } else {
+                        k[(a, 0)]
+                    }
+                }));
+            }
+        }
+        _ => {
+            for (a, b) in [(0, 1), (0, 2), (1, 2)] {
+                let (u, v) = (k.row(a), k.row(b));
+                consider(std::array::from_fn(|e| {
+                    let (f, g) = ((e + 1) % 3, (e + 2) % 3);
+                    u[f] * v[g] - u[g] * v[f]
+                }));
+            }
+        }
+    }
+    // |null vector| is the product of C's other D − 1 eigenvalues less λ: small against the
+    // mean's power where the points lie on a line (3D), and the normal then is undefined.
+    let n = best2.sqrt();
+    if n.is_nan() || n <= 0.04 * others.powi(D as i32 - 1) {
+        return None;
+    }
+    Some(std::array::from_fn(|a| best[a] / n))
 }
 
 #[cfg(test)]
@@ -173,6 +401,7 @@ mod tests {
         let mut c = Vec::new();
         let fallbacks = corrections(CubicSpline, &p, &nl, |a, b| a == b, &mut c);
         assert_eq!(fallbacks, 0);
+        let shepard = shepard(CubicSpline, &p, &nl, |a, b| a == b);
         let mut e = [0.0_f64; 4];
         for &i in which {
             e[0] = e[0].max(gradient(&p, &nl, i, &c[i].b).norm());
@@ -186,7 +415,7 @@ mod tests {
                     sum += p.volume(j) * CubicSpline.w::<D>(r, h);
                 }
             }
-            e[2] = e[2].max((sum / c[i].shepard - 1.0).abs());
+            e[2] = e[2].max((sum / shepard[i] - 1.0).abs());
             e[3] = e[3].max((sum - 1.0).abs());
         }
         e

@@ -16,13 +16,16 @@
 //!
 //! **CN-SPH** (`formulation = "corrected"`): with the corrections B_i of [`correction`], i's
 //! continuity and velocity gradient use ∇̃_i W_ij = B_i ∇_i W_ij (so a linear velocity field
-//! gives its exact L, at a surface too), and the pair force is built from both sides,
-//! T_ij ∇W → (σ_i/ρ_i²) B_i ∇_i W_ij + (σ_j/ρ_j²) B_j ∇_i W_ij − Π_ij ½(B_i + B_j) ∇_i W_ij,
-//! antisymmetric in i and j: linear momentum is conserved to round-off (3e-15 in the elastic
-//! impact), and the pairwise energy equation on the same force keeps the total energy's
-//! discretisation error to the time integration's (0.81 % drift in the elastic impact at
-//! CFL 0.3, conventional 0.73 %). Angular momentum is not conserved exactly in either
-//! formulation. The contact is the same in both (not yet with the corrected gradient).
+//! gives its exact L, at a surface too), and the stresses' pair force is built from both sides,
+//! (σ_i/ρ_i²) B_i ∇_i W_ij + (σ_j/ρ_j²) B_j ∇_i W_ij, antisymmetric in i and j: linear momentum
+//! is conserved to round-off (3e-15 in the elastic impact), and the pairwise energy equation on
+//! the same force keeps the total energy's discretisation error to the time integration's
+//! (0.81 % drift in the elastic impact at CFL 0.3, conventional 0.73 %). The viscosity keeps the
+//! plain ∇_i W_ij: it is a dissipation, not a consistency term, and a pair's B_j would cost the
+//! pass nine more loads. (σ/ρ²) B is formed once per particle, so that a pair costs CN-SPH
+//! nine more products than conventional SPH. Angular momentum is not conserved exactly in
+//! either formulation. The contact acts along the contact normal from the boundary particles
+//! (see [`colour::states`]), with either contact law.
 
 pub mod artificial_stress;
 pub mod correction;
@@ -119,6 +122,10 @@ impl<const D: usize> colour::Meeting for BodyPairs<'_, D> {
         matches!(self.0.pairs.rule(a, b), PairRule::Contact(c) if c.law == ContactLaw::Colour)
     }
 
+    fn contact(&self, a: u32, b: u32) -> bool {
+        matches!(self.0.pairs.rule(a, b), PairRule::Contact(_))
+    }
+
     fn welded(&self, a: u32, b: u32) -> bool {
         matches!(self.0.pairs.rule(a, b), PairRule::Conserve)
     }
@@ -129,18 +136,29 @@ impl<const D: usize> colour::Meeting for BodyPairs<'_, D> {
     }
 }
 
-/// The colour-law state of each real particle (see [`colour::states`]); nothing when no pair
-/// of bodies uses the colour law. Ghosts take their sources' (see `boundary`).
+/// Whether the pass needs [`colour_states`]: where a pair of bodies uses the colour law, and
+/// in CN-SPH where any pair of bodies is in contact (its contact acts along their normals).
+pub fn needs_colour_states<const D: usize>(model: &Model<D>) -> bool {
+    model.colour.is_some()
+        || (model.formulation == Formulation::Corrected
+            && model.pairs.any(|r| matches!(r, PairRule::Contact(_))))
+}
+
+/// The colour-law state of each real particle (see [`colour::states`]); nothing where
+/// [`needs_colour_states`] says so. `surfaces`: CN-SPH's surface indicator and corrections of
+/// every particle, ghosts included. Ghosts take their sources' (see `boundary`).
 pub fn colour_states<const D: usize, K: Kernel>(
     kernel: K,
     p: &Particles<D>,
     nl: &NeighborList,
     model: &Model<D>,
+    surfaces: Option<colour::Surfaces<D>>,
     out: &mut Vec<ColourState>,
 ) {
     out.clear();
-    if let Some(law) = &model.colour {
-        colour::states(kernel, p, nl, &BodyPairs(model), law, out);
+    if needs_colour_states(model) {
+        let law = model.colour.as_ref();
+        colour::states(kernel, p, nl, &BodyPairs(model), (law, surfaces), out);
     }
 }
 
@@ -195,9 +213,29 @@ pub struct Rates<const D: usize> {
     /// Per-particle artificial stress R (all particles, ghosts included, and a zero at the end
     /// for the padding; empty when no material uses it).
     art: Vec<Tensor<D>>,
-    /// Per-particle gradient correction B (CN-SPH; ghosts included, the identity for the
+    /// Per-particle gradient correction (CN-SPH; ghosts included, and a record for the
     /// padding; empty in conventional SPH).
-    corr: Vec<Tensor<D>>,
+    corr: Vec<Corrected<D>>,
+}
+
+/// What CN-SPH's pass reads of a particle's correction B, in plain arrays (row-major), as
+/// [`Gather`].
+#[derive(Debug, Clone, Copy)]
+struct Corrected<const D: usize> {
+    /// B.
+    b: [[f64; D]; D],
+    /// (σ/ρ²) B: the particle's side of the pair force, (σ_i/ρ_i²) B_i ∇W + (σ_j/ρ_j²) B_j ∇W.
+    sb: [[f64; D]; D],
+}
+
+impl<const D: usize> Corrected<D> {
+    fn new(b: &Tensor<D>, sr2: &Tensor<D>) -> Self {
+        let sb = sr2 * b;
+        Corrected {
+            b: std::array::from_fn(|r| std::array::from_fn(|c| b[(r, c)])),
+            sb: std::array::from_fn(|r| std::array::from_fn(|c| sb[(r, c)])),
+        }
+    }
 }
 
 /// What the pass reads besides the particle's own neighbour list.
@@ -205,7 +243,7 @@ pub struct Rates<const D: usize> {
 struct Pass<'a, const D: usize> {
     gather: &'a [Gather<D>],
     art: &'a [Tensor<D>],
-    corr: &'a [Tensor<D>],
+    corr: &'a [Corrected<D>],
     colour: &'a [ColourState],
     model: &'a Model<D>,
 }
@@ -354,16 +392,6 @@ fn compute_rates_on<const D: usize, K: Kernel>(
         }
     }));
     out.gather.push(Gather::padding());
-    out.art.clear();
-    if any_art {
-        out.art.par_extend((0..all).into_par_iter().map(|i| {
-            match model.material_of(p.body[i]).artificial_stress {
-                Some(eps) => artificial_stress::tensor(&p.stress(i), p.rho[i], eps),
-                None => Tensor::<D>::zeros(),
-            }
-        }));
-        out.art.push(Tensor::<D>::zeros());
-    }
     out.corr.clear();
     let cn = !corr.is_empty();
     if cn {
@@ -372,8 +400,31 @@ fn compute_rates_on<const D: usize, K: Kernel>(
             all,
             "a correction for every particle, ghosts included"
         );
-        out.corr.extend_from_slice(corr);
-        out.corr.push(Tensor::<D>::identity());
+        out.corr.par_extend(
+            (0..all)
+                .into_par_iter()
+                .map(|i| Corrected::new(&corr[i], &(p.stress(i) / (p.rho[i] * p.rho[i])))),
+        );
+        out.corr.push(Corrected::new(
+            &Tensor::<D>::identity(),
+            &Tensor::<D>::zeros(),
+        ));
+    }
+    out.art.clear();
+    if any_art {
+        // In CN-SPH the artificial stress's side of the pair force is R B, as the stress's.
+        out.art.par_extend((0..all).into_par_iter().map(|i| {
+            let r = match model.material_of(p.body[i]).artificial_stress {
+                Some(eps) => artificial_stress::tensor(&p.stress(i), p.rho[i], eps),
+                None => Tensor::<D>::zeros(),
+            };
+            if cn {
+                r * corr[i]
+            } else {
+                r
+            }
+        }));
+        out.art.push(Tensor::<D>::zeros());
     }
     let pass = Pass {
         gather: &out.gather,
@@ -415,7 +466,7 @@ fn compute_rates_on<const D: usize, K: Kernel>(
 /// Whether the CPU has 256-bit vectors (AVX2), so that the pass can run its `LANES` lanes in
 /// one register instead of two. Both builds add the same numbers in the same order (no fused
 /// multiply-adds: Rust never contracts a·b + c), so the results are bit-identical.
-fn wide_lanes() -> bool {
+pub(crate) fn wide_lanes() -> bool {
     #[cfg(target_arch = "x86_64")]
     {
         std::is_x86_feature_detected!("avx2")
@@ -532,8 +583,19 @@ fn particle_rates<const D: usize, K: Kernel, const ART: bool, const CN: bool>(
                         let gf = kernel.grad_factor::<D>(r, hij);
                         let (coef, pot, k) =
                             contact::pair::<D, K>(kernel, params, gi.vol, gj.vol, r, hij, gf * r);
-                        for a in 0..D {
-                            fc[a] += xij[a] * gf * coef;
+                        let f: [f64; D] = std::array::from_fn(|a| xij[a] * gf * coef);
+                        if CN {
+                            // CN-SPH: along the contact normal (n̂ from i's body into j's),
+                            // pushing i back into its body or not at all.
+                            let n = colour::normal(&colour[i], &colour[j as usize], &xij, r, hij);
+                            let push = dot(&f, &n).min(0.0);
+                            for a in 0..D {
+                                fc[a] += push * n[a];
+                            }
+                        } else {
+                            for a in 0..D {
+                                fc[a] += f[a];
+                            }
                         }
                         phi += 0.5 * pot;
                         k_contact += k;
@@ -557,6 +619,8 @@ fn particle_rates<const D: usize, K: Kernel, const ART: bool, const CN: bool>(
                             r,
                             vol0,
                             h0,
+                            // CN-SPH: along the contact normal only (frictionless).
+                            if CN { 0.0 } else { colour::TANGENTIAL },
                         );
                         for a in 0..D {
                             fc[a] += f[a];
@@ -700,6 +764,19 @@ fn conserve_chunk<const D: usize, K: Kernel, const ART: bool, const CN: bool>(
         ..
     } = *pass;
     let gi = &gather[i];
+    // CN-SPH: i's B and (σ/ρ²) B, and each lane's neighbour's (σ/ρ²) B, copied out (with their
+    // bounds checks) before the lanes' arithmetic, which then vectorises.
+    let zero = [[0.0; D]; D];
+    let (bi, sbi) = if CN {
+        (corr[i].b, corr[i].sb)
+    } else {
+        (zero, zero)
+    };
+    let sbj: [[[f64; D]; D]; LANES] = if CN {
+        std::array::from_fn(|l| corr[js[l] as usize].sb)
+    } else {
+        [zero; LANES]
+    };
     let g: [&Gather<D>; LANES] = std::array::from_fn(|l| &gather[js[l] as usize]);
     let (alpha, beta) = (model.alpha, model.beta);
     for l in 0..LANES {
@@ -710,16 +787,17 @@ fn conserve_chunk<const D: usize, K: Kernel, const ART: bool, const CN: bool>(
         let r = r2.sqrt();
         let gf = kernel.grad_factor::<D>(r, hij);
         let grad: [f64; D] = std::array::from_fn(|k| xij[k] * gf);
-        // CN-SPH: i's equations use ∇̃_i W_ij = B_i ∇_i W_ij, and the pair force is built from
-        // both sides, B_i ∇_i W_ij and −∇̃_j W_ji = B_j ∇_i W_ij, so that it is antisymmetric.
-        let (grad_i, grad_j) = if CN {
-            let (bi, bj) = (&corr[i], &corr[js[l] as usize]);
-            let apply = |b: &Tensor<D>| -> [f64; D] {
-                std::array::from_fn(|a| (0..D).map(|c| b[(a, c)] * grad[c]).sum())
-            };
-            (apply(bi), apply(bj))
+        // CN-SPH: i's continuity and velocity gradient use ∇̃_i W_ij = B_i ∇_i W_ij.
+        let grad_i: [f64; D] = if CN {
+            std::array::from_fn(|a| {
+                let mut g = 0.0;
+                for c in 0..D {
+                    g += bi[a][c] * grad[c];
+                }
+                g
+            })
         } else {
-            (grad, grad)
+            grad
         };
         let vij: [f64; D] = std::array::from_fn(|k| gi.v[k] - gj.v[k]);
         let near = r < 2.0 * hij;
@@ -744,17 +822,14 @@ fn conserve_chunk<const D: usize, K: Kernel, const ART: bool, const CN: bool>(
         );
         let mu = if near { mu } else { 0.0 };
         s.mu_max[l] = s.mu_max[l].max(-mu);
-        // T_ij ∇W = (σ_i/ρ_i² + σ_j/ρ_j²) ∇W − Π_ij ∇W (+ A_ij ∇W); in CN-SPH
-        // σ_i/ρ_i² ∇̃_i + σ_j/ρ_j² ∇̃_j, and Π_ij on their mean.
+        // T_ij ∇W = (σ_i/ρ_i² + σ_j/ρ_j²) ∇W − Π_ij ∇W (+ A_ij ∇W); in CN-SPH the stresses'
+        // part is built from both sides, (σ_i/ρ_i²) B_i ∇W + (σ_j/ρ_j²) B_j ∇W (the artificial
+        // stress's likewise), and the viscosity stays on the plain ∇W.
         let mut tg: [f64; D] = std::array::from_fn(|a| {
-            let mut t = if CN {
-                -pi * 0.5 * (grad_i[a] + grad_j[a])
-            } else {
-                -pi * grad[a]
-            };
+            let mut t = -pi * grad[a];
             for b in 0..D {
                 t += if CN {
-                    gi.sr2[sym(a, b)] * grad_i[b] + gj.sr2[sym(a, b)] * grad_j[b]
+                    (sbi[a][b] + sbj[l][a][b]) * grad[b]
                 } else {
                     (gi.sr2[sym(a, b)] + gj.sr2[sym(a, b)]) * grad[b]
                 };
@@ -768,11 +843,7 @@ fn conserve_chunk<const D: usize, K: Kernel, const ART: bool, const CN: bool>(
             let fa = f.powi(artificial_stress::EXPONENT);
             for a in 0..D {
                 for b in 0..D {
-                    tg[a] += if CN {
-                        (ri[(a, b)] * grad_i[b] + rj[(a, b)] * grad_j[b]) * fa
-                    } else {
-                        (ri[(a, b)] + rj[(a, b)]) * fa * grad[b]
-                    };
+                    tg[a] += (ri[(a, b)] + rj[(a, b)]) * fa * grad[b];
                 }
             }
         }
@@ -858,7 +929,7 @@ type = "welded"
         nl.build(&p.x, &p.h, p.n_real, 0.1 * p.h[0]);
         let (mut wide, mut portable) = (Rates::default(), Rates::default());
         let mut states = Vec::new();
-        colour_states(CubicSpline, &p, &nl, &model, &mut states);
+        colour_states(CubicSpline, &p, &nl, &model, None, &mut states);
         assert!(
             states.iter().any(|s| s.coef > 0.0),
             "the colour law is at work"
@@ -946,6 +1017,122 @@ shape = { type = "rectangle", min = [0.0, 0.0], max = [8.0e-3, 6.0e-3] }
             force.norm() < 1e-12 * scale,
             "net force {force:?} of {scale}"
         );
+    }
+
+    /// Per-particle contact forces of two 3D blocks pressed together across a flat face
+    /// (facing layers 0.7 Δp apart), in `formulation`, on a lattice perturbed by up to
+    /// ±`jitter` Δp (the facing layers in their plane only, so that the face stays flat), with
+    /// the contact `law`.
+    fn pressed_blocks(
+        formulation: Formulation,
+        jitter: f64,
+        law: &str,
+    ) -> (Particles<3>, Vec<Vector<3>>) {
+        let deck = format!(
+            r#"
+[simulation]
+dimension = 3
+end_time = 1.0
+[materials.al]
+density = 2700.0
+eos = {{ type = "linear" }}
+strength = {{ type = "elastic", youngs_modulus = 68.9e9, poissons_ratio = 0.33 }}
+[[body]]
+name = "a"
+material = "al"
+spacing = 1.0e-3
+shape = {{ type = "box", min = [0.0, 0.0, 0.0], max = [14.0e-3, 14.0e-3, 6.0e-3] }}
+[[body]]
+name = "b"
+material = "al"
+spacing = 1.0e-3
+shape = {{ type = "box", min = [0.0, 0.0, 5.7e-3], max = [14.0e-3, 14.0e-3, 11.7e-3] }}
+[[interaction]]
+bodies = ["a", "b"]
+type = "contact"
+law = "{law}"
+"#
+        );
+        let case = crate::deck::parse(&deck, "pressed.toml").unwrap();
+        let (mut p, mut model) = crate::setup::build::<3>(&case).unwrap();
+        model.formulation = formulation;
+        let mut seed = 4242u64;
+        let mut rnd = || {
+            seed = seed
+                .wrapping_mul(6364136223846793005)
+                .wrapping_add(1442695040888963407);
+            (seed >> 11) as f64 / (1u64 << 53) as f64 - 0.5
+        };
+        for i in 0..p.n_real {
+            let facing = (p.x[i][2] - 5.5e-3).abs() < 1e-6 || (p.x[i][2] - 6.2e-3).abs() < 1e-6;
+            for k in 0..3 {
+                let d = 2.0 * jitter * 1e-3 * rnd();
+                if !(facing && k == 2) {
+                    p.x[i][k] += d;
+                }
+            }
+        }
+        let mut nl = NeighborList::default();
+        nl.build(&p.x, &p.h, p.n_real, 0.0);
+        nl.classify(&p.body, false);
+        let (mut c, mut b, mut lambda) = (Vec::new(), Vec::new(), Vec::new());
+        let cn = formulation == Formulation::Corrected;
+        if cn {
+            corrections(CubicSpline, &p, &nl, &model, &mut c);
+            b = c.iter().map(|c| c.b).collect();
+            lambda = c.iter().map(|c| c.lambda_min).collect();
+        }
+        let surfaces = cn.then_some(colour::Surfaces {
+            lambda: &lambda,
+            b: &b,
+        });
+        let mut states = Vec::new();
+        colour_states(CubicSpline, &p, &nl, &model, surfaces, &mut states);
+        let mut rates = Rates::default();
+        compute_rates(CubicSpline, &p, &nl, &model, (&states, &b), &mut rates);
+        let f = rates.particles.iter().map(|r| r.contact_force).collect();
+        (p, f)
+    }
+
+    /// Issue 12, item 3: in CN-SPH the contact force of a flat contact points along the surface
+    /// normal, within 1° at every particle away from the blocks' edges (the normal of an edge is
+    /// not defined), on a regular and on a
+    /// perturbed lattice, with either contact law; in conventional SPH it strays on the
+    /// perturbed lattice. The pair forces stay antisymmetric: the net contact force vanishes.
+    #[test]
+    fn cn_contact_acts_along_the_surface_normal() {
+        let angles = |formulation, jitter, law| {
+            let (p, f) = pressed_blocks(formulation, jitter, law);
+            let biggest = f.iter().map(|f| f.norm()).fold(0.0, f64::max);
+            assert!(biggest > 0.0, "no contact force");
+            // Two supports from the side faces: nearer, a neighbour's normal sees the edge.
+            let inner = |x: f64| (5.0e-3..9.0e-3).contains(&x);
+            let worst = (0..p.n_real)
+                .filter(|&i| inner(p.x[i][0]) && inner(p.x[i][1]))
+                .filter(|&i| f[i].norm() > 1e-3 * biggest)
+                .map(|i| (f[i][2].abs() / f[i].norm()).min(1.0).acos().to_degrees())
+                .fold(0.0, f64::max);
+            let net: Vector<3> = f.iter().sum();
+            let total: f64 = f.iter().map(|f| f.norm()).sum();
+            assert!(
+                net.norm() < 1e-12 * total,
+                "net contact force {net:?} of {total}"
+            );
+            worst
+        };
+        for law in ["colour", "paper"] {
+            for jitter in [0.0, 0.1] {
+                let cn = angles(Formulation::Corrected, jitter, law);
+                let conventional = angles(Formulation::Conventional, jitter, law);
+                println!(
+                    "{law} law, lattice perturbed by ±{jitter} Δp: worst angle to the normal CN-SPH {cn:.2e}°, conventional {conventional:.2}°"
+                );
+                assert!(cn < 1.0, "CN-SPH: {cn}°");
+                if jitter > 0.0 {
+                    assert!(conventional > 3.0, "conventional: {conventional}°");
+                }
+            }
+        }
     }
 
     /// Bodies closing on each other through the contact bound the time step by their relative
