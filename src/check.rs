@@ -21,6 +21,10 @@ use std::fmt::Write;
 /// figure below what `strike bench` measures on one core of the 2-core reference machine.
 pub const PLANNING_PARTICLE_STEPS_PER_CORE: f64 = 5.0e5;
 
+/// CN-SPH's pass with its correction pass costs about twice conventional SPH's per
+/// particle-step (`strike bench`, cubes_3d_cn against cubes_3d: 48 %).
+pub const CN_COST: f64 = 2.0;
+
 /// `check` sets a case up (and takes one step) only up to this many estimated particles.
 pub const SET_UP_LIMIT: f64 = 1.0e6;
 
@@ -78,7 +82,7 @@ pub fn estimated_first_step(case: &Case) -> (f64, usize) {
                 .map(|o| speed(&b.velocity, &o.velocity))
                 .fold(0.0, f64::max);
             let h = s.smoothing_ratio * b.spacing;
-            (s.cfl * h / (c * (1.0 + 0.6 * s.viscosity_alpha) + v), i)
+            (s.cfl() * h / (c * (1.0 + 0.6 * s.viscosity_alpha) + v), i)
         })
         .fold((f64::INFINITY, 0), |a, b| if b.0 < a.0 { b } else { a })
 }
@@ -115,7 +119,11 @@ fn plan_lines(case: &Case, n: f64, dt: f64, w: &mut String, warnings: &mut Vec<S
     let steps = (case.simulation.end_time / dt).ceil();
     let bytes = n * estimated_bytes_per_particle(case.dimension) as f64;
     let cores = crate::machine::cores() as f64;
-    let seconds = steps * n / (PLANNING_PARTICLE_STEPS_PER_CORE * cores);
+    let per_core = match case.simulation.formulation {
+        crate::case::Formulation::Conventional => PLANNING_PARTICLE_STEPS_PER_CORE,
+        crate::case::Formulation::Corrected => PLANNING_PARTICLE_STEPS_PER_CORE / CN_COST,
+    };
+    let seconds = steps * n / (per_core * cores);
     let _ = writeln!(
         w,
         "first time step: {dt:.4e} s  → about {steps:.0} steps to {:.4e} s (contact may shorten it)",
@@ -127,7 +135,7 @@ fn plan_lines(case: &Case, n: f64, dt: f64, w: &mut String, warnings: &mut Vec<S
         "estimated run time: {} on {} cores (planning figure {:.0e} particle-steps/s per core)",
         human_seconds(seconds),
         cores,
-        PLANNING_PARTICLE_STEPS_PER_CORE
+        per_core
     );
     if seconds > LONG_RUN {
         warnings.push(format!(

@@ -780,14 +780,14 @@ impl Ctx<'_> {
             }
         };
         let cfl = match &s.cfl {
-            Some(c) => self.check(
+            Some(c) => Some(self.check(
                 c,
                 "simulation.cfl",
                 |x| x > 0.0 && x <= 1.0,
                 "must be in (0, 1]",
-                "a Courant number, typically 0.2–0.4; default 0.3",
-            )?,
-            None => 0.3,
+                "a Courant number, typically 0.15–0.4; default 0.3 (0.15 in CN-SPH)",
+            )?),
+            None => None,
         };
         let max_steps = match &s.max_steps {
             Some(m) if *m.get_ref() > 0 => Some(*m.get_ref() as u64),

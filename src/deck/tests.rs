@@ -78,7 +78,7 @@ fn full_3d_deck() {
 
     let s = &case.simulation;
     assert_eq!(s.end_time, 2.0e-7);
-    assert_eq!(s.cfl, 0.3);
+    assert_eq!(s.cfl(), 0.3);
     assert_eq!(s.max_steps, None);
     assert_eq!(s.kernel, KernelKind::CubicSpline);
     assert_eq!(s.smoothing_ratio, 1.2);
@@ -335,7 +335,7 @@ fn full_2d_deck() {
     assert_eq!(case.dimension, 2);
     let s = &case.simulation;
     assert_eq!(s.end_time, 1e-3);
-    assert_eq!(s.cfl, 0.25);
+    assert_eq!(s.cfl(), 0.25);
     assert_eq!(s.max_steps, Some(5000));
     assert_eq!(s.kernel, KernelKind::WendlandC2);
     assert_eq!(s.smoothing_ratio, 1.3);

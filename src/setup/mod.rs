@@ -65,7 +65,7 @@ pub fn build<const D: usize>(case: &Case) -> Result<(Particles<D>, Model<D>)> {
         alpha: s.viscosity_alpha,
         beta: s.viscosity_beta,
         gravity: from3::<D>(s.gravity),
-        cfl: s.cfl,
+        cfl: s.cfl(),
         smoothing_ratio: s.smoothing_ratio,
         h_min_ratio: s.h_min_ratio,
         h_max_ratio: s.h_max_ratio,
