@@ -6,9 +6,17 @@ use strike::deck;
 use strike::run::{run, RunOptions};
 use strike::simulation::Simulation;
 
+/// In both formulations (examples/sphere_plate.toml and its CN-SPH twin,
+/// examples/sphere_plate_cn.toml).
 #[test]
 fn coarse_sphere_plate_impact() {
-    let path = Path::new(env!("CARGO_MANIFEST_DIR")).join("examples/sphere_plate.toml");
+    for name in ["sphere_plate", "sphere_plate_cn"] {
+        coarse_impact(name);
+    }
+}
+
+fn coarse_impact(name: &str) {
+    let path = Path::new(env!("CARGO_MANIFEST_DIR")).join(format!("examples/{name}.toml"));
     let mut case = deck::load(&path).unwrap();
     let dp = 50e-6;
     for b in &mut case.bodies {
@@ -64,7 +72,7 @@ fn coarse_sphere_plate_impact() {
     let plug_below =
         plug.iter().filter(|&&i| p.x[i][2] < -2.0e-4).count() as f64 / plug.len() as f64;
     println!(
-        "sphere-plate Δp = {dp:e} m, {n} particles, {} steps: energy error {energy_error:.3e}, \
+        "{name} Δp = {dp:e} m, {n} particles, {} steps: energy error {energy_error:.3e}, \
          z-momentum error {momentum_error:.3e}, min inter-body distance {min_gap:.3} Δp, \
          penetration {penetration:.2} Δp ({mixed} particles), \
          rear v_z {rear_vz:.0} m/s, plug v_z {plug_vz:.0} m/s, plug below the plate's rear face {:.0} %",
