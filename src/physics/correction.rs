@@ -128,30 +128,28 @@ fn correction<const D: usize, K: Kernel>(
     mixed: bool,
     joined: &impl Fn(u32, u32) -> bool,
 ) -> Correction<D> {
-    {
-        let sums = if mixed {
-            moments::<D, K, true>(kernel, i, list, points, joined)
-        } else {
-            moments::<D, K, false>(kernel, i, list, points, joined)
-        };
-        let mut a = Tensor::<D>::zeros();
-        for (k, &(r, c)) in SYM.iter().enumerate() {
-            if r < D && c < D {
-                let v: f64 = sums[k].iter().sum();
-                a[(r, c)] = v;
-                a[(c, r)] = v;
-            }
+    let sums = if mixed {
+        moments::<D, K, true>(kernel, i, list, points, joined)
+    } else {
+        moments::<D, K, false>(kernel, i, list, points, joined)
+    };
+    let mut a = Tensor::<D>::zeros();
+    for (k, &(r, c)) in SYM.iter().enumerate() {
+        if r < D && c < D {
+            let v: f64 = sums[k].iter().sum();
+            a[(r, c)] = v;
+            a[(c, r)] = v;
         }
-        let lambda_min = min_eigenvalue(&a);
-        let inverse = (lambda_min >= LAMBDA_MIN)
-            .then(|| a.try_inverse())
-            .flatten()
-            .filter(|b| b.iter().all(|x| x.is_finite()));
-        Correction {
-            b: inverse.unwrap_or_else(Tensor::<D>::identity),
-            lambda_min,
-            fallback: inverse.is_none(),
-        }
+    }
+    let lambda_min = min_eigenvalue(&a);
+    let inverse = (lambda_min >= LAMBDA_MIN)
+        .then(|| a.try_inverse())
+        .flatten()
+        .filter(|b| b.iter().all(|x| x.is_finite()));
+    Correction {
+        b: inverse.unwrap_or_else(Tensor::<D>::identity),
+        lambda_min,
+        fallback: inverse.is_none(),
     }
 }
 
