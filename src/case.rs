@@ -115,6 +115,21 @@ pub struct MaterialSpec {
     pub pressure_cutoff: Option<f64>,
     /// Artificial stress ε (Monaghan 2000), None: off.
     pub artificial_stress: Option<f64>,
+    /// Damage models (none: the material never fails).
+    pub damage: DamageSpec,
+}
+
+/// A material's damage models (see `material::damage`).
+#[derive(Debug, Clone, Default, PartialEq)]
+pub struct DamageSpec {
+    pub spall: Option<crate::material::Spall>,
+    pub johnson_cook: Option<crate::material::JohnsonCookFailure>,
+}
+
+impl DamageSpec {
+    pub fn is_none(&self) -> bool {
+        self.spall.is_none() && self.johnson_cook.is_none()
+    }
 }
 
 #[derive(Debug, Clone, PartialEq)]
@@ -130,6 +145,8 @@ pub enum EosSpec {
         gamma0: f64,
         a: f64,
     },
+    /// Tillotson (hypervelocity, vaporisation).
+    Tillotson(crate::material::Tillotson),
 }
 
 #[derive(Debug, Clone, PartialEq)]
@@ -144,6 +161,10 @@ pub enum StrengthSpec {
         yield_stress: f64,
         hardening_modulus: f64,
     },
+    /// Johnson–Cook: strain hardening, strain rate, thermal softening.
+    JohnsonCook(crate::material::JohnsonCook),
+    /// Steinberg–Guinan: pressure hardening, thermal softening, melting.
+    SteinbergGuinan(crate::material::SteinbergGuinan),
 }
 
 /// A body: one shape filled with particles on a lattice, one material.
@@ -239,6 +260,7 @@ pub enum ColorBy {
     Body,
     Pressure,
     PlasticStrain,
+    Damage,
     Velocity,
     Density,
     VonMises,

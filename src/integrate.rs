@@ -25,9 +25,10 @@
 //! and kinetic energy then exchange the same work to second order, at the cost of one dot
 //! product per pair and no extra neighbour pass.
 
-use crate::material::radial_return;
+use crate::material::{radial_return, DamageState, Damaged};
 use crate::particles::{Particles, Tensor, Vector};
 use crate::physics::{Model, Rates};
+use crate::tensor::{equivalent_strain_rate, max_principal, out_of_plane, von_mises};
 use rayon::prelude::*;
 
 /// Predict v^n = v^{n−½} + ½ Δt_{n−1} a^{n−1} for the real particles (prescribed bodies keep
@@ -66,6 +67,7 @@ pub fn advance<const D: usize>(
     let h0 = &p.h0[..n];
     let v_pred = &p.v[..n];
     let m_body = &model.body_prescribed;
+    let m = &p.m[..n];
 
     p.vh[..n]
         .par_iter_mut()
@@ -81,9 +83,13 @@ pub fn advance<const D: usize>(
         .zip(p.contact_force[..n].par_iter_mut())
         .zip(p.u[..n].par_iter_mut())
         .zip(p.eh[..n].par_iter_mut())
+        .zip(p.damage[..n].par_iter_mut())
         .enumerate()
         .for_each(
-            |(i, ((((((((((((vh, a), x), rho), e), s), eps_p), h), pr), c), fc), u), eh))| {
+            |(
+                i,
+                (((((((((((((vh, a), x), rho), e), s), eps_p), h), pr), c), fc), u), eh), dmg),
+            )| {
                 let b = body[i] as usize;
                 let mat = model.material_of(body[i]);
                 let v_old = *vh;
@@ -102,18 +108,49 @@ pub fn advance<const D: usize>(
                 *rho += rates.particles[i].drho * dt;
                 *eh += rates.particles[i].de * kick + rates.particles[i].de_lag;
                 *e = *eh + rates.particles[i].de * (0.5 * dt);
-                let g = mat.strength.shear_modulus();
-                if g > 0.0 {
-                    let trial = *s + jaumann_rate(s, &rates.particles[i].grad_v, g) * dt;
-                    let (s_new, d_eps) = radial_return(&trial, *eps_p, mat.strength.as_ref());
+                let p_eos = mat.eos.pressure(*rho, *e);
+                let grad_v = &rates.particles[i].grad_v;
+                let rate = equivalent_strain_rate(grad_v);
+                let mut d_eps = 0.0;
+                if mat.strength.reference_shear_modulus() > 0.0 {
+                    let st = mat.strength_state(*rho, *e, *eps_p, rate, p_eos);
+                    let g = mat.strength.shear_modulus(&st);
+                    let trial = *s + jaumann_rate(s, grad_v, g) * dt;
+                    let damaged = Damaged {
+                        inner: mat.strength.as_ref(),
+                        keep: 1.0 - *dmg,
+                    };
+                    let (s_new, d) = radial_return(&trial, &st, &damaged);
                     *s = s_new;
-                    *eps_p += d_eps;
+                    d_eps = d;
+                    *eps_p += d;
+                }
+                if !mat.damage.is_empty() && *dmg < 1.0 {
+                    let sigma = *s - Tensor::<D>::identity() * p_eos;
+                    let st = mat.strength_state(*rho, *e, *eps_p, rate, p_eos);
+                    let volume = m[i] / *rho;
+                    let state = DamageState {
+                        sigma_1: max_principal(&sigma, out_of_plane(s) - p_eos),
+                        p: p_eos,
+                        sigma_eq: von_mises(s),
+                        d_eps_p: d_eps,
+                        rate,
+                        t_star: mat.strength.homologous_temperature(&st),
+                        c: *c,
+                        size: if D == 2 { volume.sqrt() } else { volume.cbrt() },
+                    };
+                    for model in &mat.damage {
+                        *dmg = model.grow(&state, *dmg, dt);
+                    }
+                    if *dmg >= 1.0 {
+                        *s = Tensor::<D>::zeros();
+                    }
                 }
                 // h = h0 (ρ0/ρ)^(1/D), bounded.
                 let ratio = mat.rho0 / *rho;
                 let hh = h0[i] * if D == 2 { ratio.sqrt() } else { ratio.cbrt() };
                 *h = hh.clamp(model.h_min_ratio * h0[i], model.h_max_ratio * h0[i]);
-                *pr = mat.pressure(*rho, *e);
+                *pr = mat.damaged_pressure(*rho, *e, *dmg);
                 *c = mat.sound_speed(*rho, *e);
                 *fc = rates.particles[i].contact_force;
             },

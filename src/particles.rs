@@ -32,6 +32,7 @@ macro_rules! for_each_field {
             h,
             h0,
             eps_p,
+            damage,
             body,
             id,
             contact_force
@@ -75,6 +76,8 @@ pub struct Particles<const D: usize> {
     pub h0: Vec<f64>,
     /// Equivalent plastic strain εp.
     pub eps_p: Vec<f64>,
+    /// Damage D ∈ [0, 1] (see `material::damage`); 1: failed.
+    pub damage: Vec<f64>,
     /// Body index (into the case's bodies).
     pub body: Vec<u32>,
     /// Original particle number (stable through reordering; ghosts carry their source's).
@@ -124,6 +127,7 @@ impl<const D: usize> Particles<D> {
         self.h.push(h);
         self.h0.push(h);
         self.eps_p.push(0.0);
+        self.damage.push(0.0);
         self.body.push(body);
         self.id.push(id);
         self.contact_force.push(Vector::<D>::zeros());

@@ -677,6 +677,7 @@ fn color_name(c: ColorBy) -> &'static str {
         ColorBy::Body => "body",
         ColorBy::Pressure => "pressure",
         ColorBy::PlasticStrain => "plastic_strain",
+        ColorBy::Damage => "damage",
         ColorBy::Velocity => "velocity",
         ColorBy::Density => "density",
         ColorBy::VonMises => "von_mises",

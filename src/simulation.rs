@@ -46,6 +46,8 @@ pub struct Diagnostics {
     pub correction_fallbacks: usize,
     /// Neighbour entries of the real particles this step (particle-neighbour interactions).
     pub interactions: usize,
+    /// Particles that have failed (damage 1).
+    pub failed: usize,
 }
 
 /// A run in progress.
@@ -123,6 +125,8 @@ struct Sums {
     gravity: f64,
     max_pressure: f64,
     gap: f64,
+    /// Particles with damage 1.
+    failed: usize,
 }
 
 impl Default for Sums {
@@ -136,6 +140,7 @@ impl Default for Sums {
             gravity: 0.0,
             max_pressure: f64::NEG_INFINITY,
             gap: f64::INFINITY,
+            failed: 0,
         }
     }
 }
@@ -163,6 +168,7 @@ impl Sums {
         self.gravity += o.gravity;
         self.max_pressure = self.max_pressure.max(o.max_pressure);
         self.gap = self.gap.min(o.gap);
+        self.failed += o.failed;
         self
     }
 }
@@ -396,6 +402,7 @@ impl<const D: usize> Simulation<D> {
                 s.gravity -= p.m[i] * g.dot(&p.x[i]);
                 s.max_pressure = s.max_pressure.max(p.p[i]);
                 s.gap = s.gap.min(rates[i].min_interbody_gap);
+                s.failed += usize::from(p.damage[i] >= 1.0);
             }
             s
         });
@@ -426,6 +433,7 @@ impl<const D: usize> Simulation<D> {
             min_interbody_distance: old.gap.is_finite().then_some(old.gap),
             mixing,
             correction_fallbacks: fallbacks,
+            failed: old.failed,
             ..Default::default()
         };
         for block in self.body_force_blocks.chunks_exact(bodies.max(1)) {

@@ -23,6 +23,28 @@ pub fn von_mises<const D: usize>(s: &Tensor<D>) -> f64 {
     (1.5 * deviator_norm2(s)).sqrt()
 }
 
+/// Equivalent strain rate ε̇ = √(2/3 d′:d′) of a velocity gradient L, with d = (L + Lᵀ)/2 and d′
+/// its deviator (in 2D plane strain d_zz = 0, and d′_zz = −tr d/3 counts).
+pub fn equivalent_strain_rate<const D: usize>(l: &Tensor<D>) -> f64 {
+    let d = (l + l.transpose()) * 0.5;
+    let mean = d.trace() / 3.0;
+    let dev = d - Tensor::<D>::identity() * mean;
+    let zz = if D == 2 { -mean } else { 0.0 };
+    (2.0 / 3.0 * (dev.component_mul(&dev).sum() + zz * zz)).sqrt()
+}
+
+/// Largest principal value of a symmetric stress σ, the plane-strain σ_zz included in 2D (given
+/// as `zz`; ignored in 3D).
+pub fn max_principal<const D: usize>(sigma: &Tensor<D>, zz: f64) -> f64 {
+    let (values, _) = symmetric_eigen(sigma);
+    let top = values.iter().copied().fold(f64::NEG_INFINITY, f64::max);
+    if D == 2 {
+        top.max(zz)
+    } else {
+        top
+    }
+}
+
 /// Eigen-decomposition of a symmetric D×D matrix by cyclic Jacobi rotations:
 /// returns (eigenvalues, eigenvectors as columns), A = Q diag(λ) Qᵀ. Exact to round-off for
 /// the 2×2 and 3×3 stresses it is used on.

@@ -104,7 +104,7 @@ fn run_outputs_open_in_vtk() {
         String::from_utf8_lossy(&run.stderr)
     );
     let s = Summary::read(&out.join("summary.json")).unwrap();
-    let fields = "body,velocity,pressure,density,internal_energy,deviatoric_stress,von_mises,plastic_strain,smoothing_length,contact_force";
+    let fields = "body,velocity,pressure,density,internal_energy,deviatoric_stress,von_mises,plastic_strain,damage,smoothing_length,contact_force";
     let pvd = out.join("hugoniot_elastic_limit.pvd");
     let check = Command::new(python())
         .arg(root().join("tests/vtk_check.py"))

@@ -42,19 +42,12 @@ fn front(sim: &Simulation<2>, body: u32, v: f64) -> f64 {
 }
 
 fn elastic_constants(case: &Case) -> (f64, f64, f64) {
-    use strike::case::{EosSpec, StrengthSpec};
     let m = &case.materials[case.bodies[1].material];
-    let k = match m.eos {
-        EosSpec::Linear { bulk_modulus } => bulk_modulus,
-        EosSpec::MieGruneisen { c0, .. } => m.density * c0 * c0,
-    };
-    let g = match m.strength {
-        StrengthSpec::Elastic { shear_modulus } | StrengthSpec::VonMises { shear_modulus, .. } => {
-            shear_modulus
-        }
-        StrengthSpec::Hydrodynamic => 0.0,
-    };
-    (m.density, k, g)
+    (
+        m.density,
+        m.eos.bulk_modulus(m.density),
+        m.strength.shear_modulus(),
+    )
 }
 
 /// Elastic wave in uniaxial strain: the front (where v_x passes half the piston's speed) moves

@@ -13,7 +13,7 @@ use strike::output::vtk::{self, PvdWriter};
 use strike::particles::{Particles, Tensor, Vector};
 
 const FIELDS: &str = "body,id,velocity,pressure,density,internal_energy,deviatoric_stress,\
-                      von_mises,plastic_strain,smoothing_length,contact_force,mass";
+                      von_mises,plastic_strain,damage,smoothing_length,contact_force,mass";
 
 fn out_dir(name: &str) -> PathBuf {
     let dir = Path::new(env!("CARGO_TARGET_TMPDIR")).join(name);

@@ -155,8 +155,8 @@ impl UniaxialCurve {
 /// σ_u(ε) = p(ρ0/(1 − ε), 0) + min(4G/3 ε, 2Y0/3): the stress of a uniaxial compression ε.
 pub fn stress(m: &Material, eps: f64) -> f64 {
     let p = m.pressure(m.rho0 / (1.0 - eps), 0.0).max(0.0);
-    let g = m.strength.shear_modulus();
-    let y = m.strength.yield_stress(0.0);
+    let g = m.strength.reference_shear_modulus();
+    let y = m.strength.reference_yield_stress();
     p + (4.0 / 3.0 * g * eps).min(2.0 / 3.0 * y)
 }
 

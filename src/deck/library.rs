@@ -77,6 +77,7 @@ pub fn library_material(name: &str) -> Option<MaterialSpec> {
         strength,
         pressure_cutoff: None,
         artificial_stress: None,
+        damage: Default::default(),
     })
 }
 

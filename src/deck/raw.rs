@@ -180,38 +180,59 @@ pub struct Viscosity {
 pub struct Material {
     pub library: Option<S<String>>,
     pub density: Num,
-    pub eos: Option<Eos>,
-    pub strength: Option<Strength>,
+    pub eos: Option<ModelTable>,
+    pub strength: Option<ModelTable>,
+    pub damage: Option<ModelTable>,
     pub pressure_cutoff: Num,
     pub artificial_stress: Num,
 }
 
-/// Every key any EOS takes; which ones belong to which `type` is checked after reading.
-#[derive(Debug, Default, serde::Deserialize)]
-#[serde(deny_unknown_fields)]
-pub struct Eos {
-    #[serde(rename = "type")]
+/// A model's table (`eos`, `strength`, `damage`): its `type` and its numeric parameters, in
+/// document order. Which keys a type takes is the model's own list (`material::params`),
+/// checked after reading.
+#[derive(Debug, Default)]
+pub struct ModelTable {
     pub kind: Option<S<String>>,
-    pub c0: Num,
-    pub s1: Num,
-    pub s2: Num,
-    pub s3: Num,
-    pub gamma0: Num,
-    pub a: Num,
-    pub bulk_modulus: Num,
+    pub values: Vec<(S<String>, S<Entry>)>,
 }
 
-/// Every key any strength model takes.
-#[derive(Debug, Default, serde::Deserialize)]
-#[serde(deny_unknown_fields)]
-pub struct Strength {
-    #[serde(rename = "type")]
-    pub kind: Option<S<String>>,
-    pub shear_modulus: Num,
-    pub yield_stress: Num,
-    pub hardening_modulus: Num,
-    pub youngs_modulus: Num,
-    pub poissons_ratio: Num,
+/// A value in a model's table: a number (integers read as numbers) or some text.
+#[derive(Debug, Clone, serde::Deserialize)]
+#[serde(untagged)]
+pub enum Entry {
+    Number(f64),
+    Text(String),
+    Other(serde::de::IgnoredAny),
+}
+
+impl ModelTable {
+    /// The entry of `key`, if the table has it.
+    pub fn get(&self, key: &str) -> Option<&(S<String>, S<Entry>)> {
+        self.values.iter().find(|(k, _)| k.get_ref() == key)
+    }
+}
+
+impl<'de> Deserialize<'de> for ModelTable {
+    fn deserialize<D: Deserializer<'de>>(deserializer: D) -> Result<Self, D::Error> {
+        let Ordered(entries) = Ordered::<S<String>, S<Entry>>::deserialize(deserializer)?;
+        let mut table = ModelTable::default();
+        for (k, v) in entries {
+            if k.get_ref() == "type" {
+                let span = v.span();
+                match v.into_inner() {
+                    Entry::Text(t) => table.kind = Some(S::new(span, t)),
+                    _ => {
+                        return Err(D::Error::custom(
+                            "invalid type: `type` must be a string, expected a string",
+                        ))
+                    }
+                }
+            } else {
+                table.values.push((k, v));
+            }
+        }
+        Ok(table)
+    }
 }
 
 #[derive(Debug, serde::Deserialize)]

@@ -1,4 +1,5 @@
 use super::*;
+use crate::case::{EosSpec, StrengthSpec};
 use approx::assert_relative_eq;
 
 const DECK_3D: &str = r#"

@@ -1,4 +1,7 @@
-//! Equations of state p(ρ, e).
+//! Equations of state p(ρ, e): linear and Mie–Grüneisen here, and
+//! [`super::tillotson::Tillotson`].
+
+use super::params::{Param, Valid};
 
 /// An equation of state: pressure from density and specific internal energy.
 pub trait Eos: Send + Sync + std::fmt::Debug {
@@ -13,6 +16,14 @@ pub trait Eos: Send + Sync + std::fmt::Debug {
 pub struct LinearEos {
     pub rho0: f64,
     pub bulk_modulus: f64,
+}
+
+impl LinearEos {
+    pub const PARAMS: &'static [Param] = &[Param::required(
+        "bulk_modulus",
+        "the bulk modulus K in Pa, e.g. 76e9 for aluminium",
+        Valid::Positive,
+    )];
 }
 
 impl Eos for LinearEos {
@@ -47,6 +58,32 @@ pub struct MieGruneisen {
 }
 
 impl MieGruneisen {
+    pub const PARAMS: &'static [Param] = &[
+        Param::required(
+            "c0",
+            "the bulk sound speed C in m/s, e.g. 5328 for Al 2024-T4",
+            Valid::Positive,
+        ),
+        Param::required(
+            "s1",
+            "the slope S1 of the Us–up Hugoniot, e.g. 1.338",
+            Valid::NonNegative,
+        ),
+        Param::optional("s2", "the Hugoniot's S2, usually 0", Valid::Any, 0.0),
+        Param::optional("s3", "the Hugoniot's S3, usually 0", Valid::Any, 0.0),
+        Param::required(
+            "gamma0",
+            "the Grüneisen coefficient γ0, e.g. 2.0",
+            Valid::NonNegative,
+        ),
+        Param::optional(
+            "a",
+            "the first-order volume correction a to γ0, usually 0",
+            Valid::Any,
+            0.0,
+        ),
+    ];
+
     /// (p, dp/dμ at constant E) for the given μ and E.
     fn p_and_slope(&self, mu: f64, big_e: f64) -> (f64, f64) {
         let k = self.rho0 * self.c0 * self.c0;

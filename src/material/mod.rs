@@ -3,12 +3,22 @@
 //! the "elastic-plastic hydrodynamic" model with a Mie–Grüneisen EOS (LS-DYNA MAT_010 +
 //! EOS_GRUNEISEN).
 
+pub mod damage;
 pub mod eos;
+pub mod johnson_cook;
+pub mod params;
+pub mod steinberg_guinan;
 pub mod strength;
+pub mod tillotson;
 
 use crate::case::{EosSpec, MaterialSpec, StrengthSpec};
+pub use damage::{Damage, DamageState, Damaged, JohnsonCookFailure, Spall};
 pub use eos::{Eos, LinearEos, MieGruneisen};
-pub use strength::{radial_return, Strength, VonMises};
+pub use johnson_cook::JohnsonCook;
+use params::{Param, ParamError, Parameters};
+pub use steinberg_guinan::SteinbergGuinan;
+pub use strength::{radial_return, Strength, StrengthState, VonMises};
+pub use tillotson::Tillotson;
 
 /// A material as the solver sees it.
 #[derive(Debug)]
@@ -22,6 +32,8 @@ pub struct Material {
     pub p_min: f64,
     /// Artificial stress ε (Monaghan 2000), None when off.
     pub artificial_stress: Option<f64>,
+    /// Damage models, applied in this order (empty: never fails).
+    pub damage: Vec<Box<dyn Damage>>,
 }
 
 impl Material {
@@ -46,6 +58,7 @@ impl Material {
                 gamma0,
                 a,
             }),
+            EosSpec::Tillotson(t) => Box::new(Tillotson { rho0, ..t }),
         };
         let strength: Box<dyn Strength> = match spec.strength {
             StrengthSpec::Hydrodynamic => Box::new(VonMises {
@@ -67,7 +80,16 @@ impl Material {
                 yield_stress,
                 hardening_modulus,
             }),
+            StrengthSpec::JohnsonCook(jc) => Box::new(jc),
+            StrengthSpec::SteinbergGuinan(sg) => Box::new(sg),
         };
+        let mut damage: Vec<Box<dyn Damage>> = Vec::new();
+        if let Some(s) = spec.damage.spall {
+            damage.push(Box::new(s));
+        }
+        if let Some(f) = spec.damage.johnson_cook {
+            damage.push(Box::new(f));
+        }
         Material {
             name: spec.name.clone(),
             rho0,
@@ -75,6 +97,7 @@ impl Material {
             strength,
             p_min: spec.pressure_cutoff.unwrap_or(f64::NEG_INFINITY),
             artificial_stress: spec.artificial_stress,
+            damage,
         }
     }
 
@@ -83,13 +106,43 @@ impl Material {
         self.eos.pressure(rho, e).max(self.p_min)
     }
 
+    /// Pressure carried with damage D: the cut-off, and (1 − D) of any tension.
+    pub fn damaged_pressure(&self, rho: f64, e: f64, d: f64) -> f64 {
+        let p = self.pressure(rho, e);
+        if p < 0.0 {
+            p * (1.0 - d)
+        } else {
+            p
+        }
+    }
+
+    /// The strength model's state at (ρ, e) with plastic strain εp, strain rate and pressure p.
+    pub fn strength_state(&self, rho: f64, e: f64, eps_p: f64, rate: f64, p: f64) -> StrengthState {
+        StrengthState {
+            eps_p,
+            rate,
+            e,
+            eta: rho / self.rho0,
+            p,
+        }
+    }
+
     /// Sound speed c = √((K_s + 4G/3)/ρ), the longitudinal wave speed used for the time step and
-    /// the viscosity. K_s is floored at 1 % of its reference value so that a particle in deep
-    /// tension still has a finite signal speed.
+    /// the viscosity, with G at the state (it grows with pressure in Steinberg–Guinan). K_s is
+    /// floored at 1 % of its reference value so that a particle in deep tension (or a
+    /// Tillotson vapour) still has a finite signal speed.
     pub fn sound_speed(&self, rho: f64, e: f64) -> f64 {
         let k0 = self.eos.bulk_modulus(self.rho0, 0.0);
         let ks = self.eos.bulk_modulus(rho, e).max(0.01 * k0);
-        ((ks + 4.0 / 3.0 * self.strength.shear_modulus()) / rho).sqrt()
+        let g = self.strength.reference_shear_modulus();
+        let g = if g > 0.0 {
+            let p = self.eos.pressure(rho, e);
+            self.strength
+                .shear_modulus(&self.strength_state(rho, e, 0.0, 0.0, p))
+        } else {
+            0.0
+        };
+        ((ks + 4.0 / 3.0 * g) / rho).sqrt()
     }
 
     /// Reference bulk modulus K0 = ρ0 c0².
@@ -100,5 +153,181 @@ impl Material {
     /// Reference longitudinal sound speed.
     pub fn sound_speed0(&self) -> f64 {
         self.sound_speed(self.rho0, 0.0)
+    }
+}
+
+/// The keys of the strength models that have a shear modulus can also be given as Young's
+/// modulus and Poisson's ratio (the deck derives G, and K for a linear EOS).
+pub const ELASTIC_CONSTANTS: [&str; 2] = ["youngs_modulus", "poissons_ratio"];
+
+/// The strength models a deck can name (`type`), each with its parameters.
+pub const STRENGTH_MODELS: [(&str, &[Param]); 5] = [
+    ("hydrodynamic", &[]),
+    ("elastic", strength::ELASTIC_PARAMS),
+    ("von_mises", VonMises::PARAMS),
+    (JohnsonCook::NAME, JohnsonCook::PARAMS),
+    (SteinbergGuinan::NAME, SteinbergGuinan::PARAMS),
+];
+
+/// The equations of state a deck can name, each with its parameters (ρ0 is the material's).
+pub const EOS_MODELS: [(&str, &[Param]); 3] = [
+    ("linear", LinearEos::PARAMS),
+    ("mie_gruneisen", MieGruneisen::PARAMS),
+    ("tillotson", Tillotson::PARAMS),
+];
+
+/// The damage choices a deck can name: none, spall alone, or Johnson–Cook failure with an
+/// optional spall strength (0: none).
+pub const DAMAGE_MODELS: [(&str, &[Param]); 3] = [
+    ("none", &[]),
+    ("spall", Spall::PARAMS),
+    ("johnson_cook", damage::JOHNSON_COOK_WITH_SPALL),
+];
+
+/// The parameters of model `kind` in `models`.
+pub fn params_of(models: &[(&'static str, &'static [Param])], kind: &str) -> &'static [Param] {
+    models
+        .iter()
+        .find(|(k, _)| *k == kind)
+        .map_or(&[], |(_, p)| p)
+}
+
+impl StrengthSpec {
+    /// Its `type` in a deck.
+    pub fn kind(&self) -> &'static str {
+        match self {
+            StrengthSpec::Hydrodynamic => "hydrodynamic",
+            StrengthSpec::Elastic { .. } => "elastic",
+            StrengthSpec::VonMises { .. } => "von_mises",
+            StrengthSpec::JohnsonCook(_) => JohnsonCook::NAME,
+            StrengthSpec::SteinbergGuinan(_) => SteinbergGuinan::NAME,
+        }
+    }
+
+    /// Its parameter values, in the order of its model's list.
+    pub fn values(&self) -> Vec<f64> {
+        match self {
+            StrengthSpec::Hydrodynamic => vec![],
+            StrengthSpec::Elastic { shear_modulus } => vec![*shear_modulus],
+            StrengthSpec::VonMises {
+                shear_modulus,
+                yield_stress,
+                hardening_modulus,
+            } => vec![*shear_modulus, *yield_stress, *hardening_modulus],
+            StrengthSpec::JohnsonCook(m) => m.values(),
+            StrengthSpec::SteinbergGuinan(m) => m.values(),
+        }
+    }
+
+    /// Model `kind` from its parameter values (each already valid by itself).
+    pub fn from_values(kind: &str, v: &[f64]) -> Result<Self, ParamError> {
+        Ok(match kind {
+            "hydrodynamic" => StrengthSpec::Hydrodynamic,
+            "elastic" => StrengthSpec::Elastic {
+                shear_modulus: v[0],
+            },
+            "von_mises" => StrengthSpec::VonMises {
+                shear_modulus: v[0],
+                yield_stress: v[1],
+                hardening_modulus: v[2],
+            },
+            "johnson_cook" => StrengthSpec::JohnsonCook(JohnsonCook::from_values(v)?),
+            _ => StrengthSpec::SteinbergGuinan(SteinbergGuinan::from_values(v)?),
+        })
+    }
+
+    /// Reference shear modulus (0 for a fluid).
+    pub fn shear_modulus(&self) -> f64 {
+        self.values().first().copied().unwrap_or(0.0)
+    }
+}
+
+impl EosSpec {
+    pub fn kind(&self) -> &'static str {
+        match self {
+            EosSpec::Linear { .. } => "linear",
+            EosSpec::MieGruneisen { .. } => "mie_gruneisen",
+            EosSpec::Tillotson(_) => "tillotson",
+        }
+    }
+
+    pub fn values(&self) -> Vec<f64> {
+        match self {
+            EosSpec::Linear { bulk_modulus } => vec![*bulk_modulus],
+            EosSpec::MieGruneisen {
+                c0,
+                s1,
+                s2,
+                s3,
+                gamma0,
+                a,
+            } => vec![*c0, *s1, *s2, *s3, *gamma0, *a],
+            EosSpec::Tillotson(t) => t.values(),
+        }
+    }
+
+    /// Model `kind` from ρ0 and its parameter values.
+    pub fn from_values(kind: &str, rho0: f64, v: &[f64]) -> Result<Self, ParamError> {
+        Ok(match kind {
+            "linear" => EosSpec::Linear { bulk_modulus: v[0] },
+            "mie_gruneisen" => EosSpec::MieGruneisen {
+                c0: v[0],
+                s1: v[1],
+                s2: v[2],
+                s3: v[3],
+                gamma0: v[4],
+                a: v[5],
+            },
+            _ => EosSpec::Tillotson(Tillotson::from_values(rho0, v)?),
+        })
+    }
+
+    /// Reference bulk modulus K0 = ρ0 (∂p/∂ρ) at ρ0, e = 0.
+    pub fn bulk_modulus(&self, rho0: f64) -> f64 {
+        match self {
+            EosSpec::Linear { bulk_modulus } => *bulk_modulus,
+            EosSpec::MieGruneisen { c0, .. } => rho0 * c0 * c0,
+            EosSpec::Tillotson(t) => t.big_a,
+        }
+    }
+}
+
+impl crate::case::DamageSpec {
+    pub fn kind(&self) -> &'static str {
+        match (self.spall, self.johnson_cook) {
+            (_, Some(_)) => "johnson_cook",
+            (Some(_), None) => "spall",
+            (None, None) => "none",
+        }
+    }
+
+    pub fn values(&self) -> Vec<f64> {
+        let spall = self.spall.map_or(0.0, |s| s.strength);
+        match self.johnson_cook {
+            Some(f) => {
+                let mut v = f.values();
+                v.push(spall);
+                v
+            }
+            None if self.spall.is_some() => vec![spall],
+            None => vec![],
+        }
+    }
+
+    pub fn from_values(kind: &str, v: &[f64]) -> Result<Self, ParamError> {
+        Ok(match kind {
+            "none" => Self::default(),
+            "spall" => Self {
+                spall: Some(Spall { strength: v[0] }),
+                johnson_cook: None,
+            },
+            _ => {
+                let n = JohnsonCookFailure::PARAMS.len();
+                Self {
+                    spall: (v[n] > 0.0).then_some(Spall { strength: v[n] }),
+                    johnson_cook: Some(JohnsonCookFailure::from_values(&v[..n])?),
+                }
+            }
+        })
     }
 }

@@ -1,16 +1,57 @@
-//! Strength models and the radial return.
+//! Strength models behind one trait, and the radial return. The models: [`VonMises`] (here),
+//! [`super::johnson_cook::JohnsonCook`] and [`super::steinberg_guinan::SteinbergGuinan`].
 
+use super::params::{Param, Valid};
 use crate::particles::Tensor;
 use crate::tensor::deviator_norm2;
 
-/// A strength model: elastic shear modulus and the current yield stress.
+/// What a strength model may depend on besides its own parameters.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct StrengthState {
+    /// Equivalent plastic strain εp.
+    pub eps_p: f64,
+    /// Equivalent (total, deviatoric) strain rate √(2/3 d′:d′) (1/s).
+    pub rate: f64,
+    /// Specific internal energy e (J/kg): models with a temperature take it from e.
+    pub e: f64,
+    /// Compression η = ρ/ρ0.
+    pub eta: f64,
+    /// Pressure p (Pa).
+    pub p: f64,
+}
+
+impl StrengthState {
+    /// The reference state: undeformed, at rest, e = 0.
+    pub const REFERENCE: StrengthState = StrengthState {
+        eps_p: 0.0,
+        rate: 0.0,
+        e: 0.0,
+        eta: 1.0,
+        p: 0.0,
+    };
+}
+
+/// A strength model: shear modulus and yield stress at a state.
 pub trait Strength: Send + Sync + std::fmt::Debug {
     /// Shear modulus G (Pa); 0 for a fluid.
-    fn shear_modulus(&self) -> f64;
-    /// Yield stress Y(εp) (Pa); ∞ for an elastic material.
-    fn yield_stress(&self, eps_p: f64) -> f64;
-    /// Plastic hardening modulus dY/dεp (Pa).
-    fn hardening_modulus(&self) -> f64;
+    fn shear_modulus(&self, st: &StrengthState) -> f64;
+    /// Yield stress Y (Pa), ≥ 0; ∞ for an elastic material.
+    fn yield_stress(&self, st: &StrengthState) -> f64;
+    /// ∂Y/∂εp at the state (Pa); may be infinite (a power law at εp = 0).
+    fn hardening_modulus(&self, st: &StrengthState) -> f64;
+    /// Homologous temperature T* = (T − T_room)/(T_melt − T_room) in [0, 1] (1: molten, no
+    /// deviatoric stress), for the damage models; 0 for a model without temperature.
+    fn homologous_temperature(&self, _st: &StrengthState) -> f64 {
+        0.0
+    }
+    /// G in the reference state.
+    fn reference_shear_modulus(&self) -> f64 {
+        self.shear_modulus(&StrengthState::REFERENCE)
+    }
+    /// Y in the reference state (εp = 0, at the reference strain rate and temperature).
+    fn reference_yield_stress(&self) -> f64 {
+        self.yield_stress(&StrengthState::REFERENCE)
+    }
 }
 
 /// von Mises plasticity with linear isotropic hardening, Y = Y0 + E_h εp (LS-DYNA MAT_010's
@@ -23,39 +64,98 @@ pub struct VonMises {
     pub hardening_modulus: f64,
 }
 
+/// An elastic model's parameter.
+pub const ELASTIC_PARAMS: &[Param] = &[Param::required(
+    "shear_modulus",
+    "the shear modulus G in Pa, e.g. 26e9 for aluminium",
+    Valid::Positive,
+)];
+
+impl VonMises {
+    pub const PARAMS: &'static [Param] = &[
+        ELASTIC_PARAMS[0],
+        Param::required(
+            "yield_stress",
+            "the initial yield stress Y0 in Pa, e.g. 0.26e9",
+            Valid::Positive,
+        ),
+        Param::optional(
+            "hardening_modulus",
+            "the linear hardening modulus E_h in Pa (0: perfectly plastic)",
+            Valid::NonNegative,
+            0.0,
+        ),
+    ];
+}
+
 impl Strength for VonMises {
-    fn shear_modulus(&self) -> f64 {
+    fn shear_modulus(&self, _st: &StrengthState) -> f64 {
         self.shear_modulus
     }
 
-    fn yield_stress(&self, eps_p: f64) -> f64 {
-        self.yield_stress + self.hardening_modulus * eps_p
+    fn yield_stress(&self, st: &StrengthState) -> f64 {
+        self.yield_stress + self.hardening_modulus * st.eps_p
     }
 
-    fn hardening_modulus(&self) -> f64 {
+    fn hardening_modulus(&self, _st: &StrengthState) -> f64 {
         self.hardening_modulus
     }
 }
 
-/// Radial return (Wilkins 1964) of a trial deviator S*: with σ_eq = √(3/2 S*:S*) (plane-strain
-/// S_zz included) and Y = Y(εp), if σ_eq > Y the plastic strain grows by
-/// Δεp = (σ_eq − Y)/(3G + E_h) and S = S* · (Y + E_h Δεp)/σ_eq, which puts S exactly on the
-/// hardened yield surface (for E_h = 0 this is DESIGN.md's S = S* Y/σ_eq). Returns (S, Δεp).
+/// Radial return (Wilkins 1964) of a trial deviator S* at the state `st` (its rate, energy
+/// and pressure held through the step): with σ_eq = √(3/2 S*:S*) (plane-strain S_zz
+/// included), if σ_eq > Y(εp) the plastic strain grows by the Δεp that solves
+/// σ_eq − 3G Δεp = Y(εp + Δεp) and S = S* · Y(εp + Δεp)/σ_eq, exactly on the hardened yield
+/// surface. For linear hardening one Newton step solves it, Δεp = (σ_eq − Y)/(3G + E_h)
+/// (DESIGN.md's S = S* Y/σ_eq for E_h = 0); for a power law it is Newton's method kept inside
+/// the bracket [0, σ_eq/3G], bisecting where the slope is infinite or a step leaves it. A
+/// molten particle (T* = 1) carries no deviator and gains no plastic strain. Returns (S, Δεp).
 pub fn radial_return<const D: usize>(
     s_trial: &Tensor<D>,
-    eps_p: f64,
+    st: &StrengthState,
     strength: &dyn Strength,
 ) -> (Tensor<D>, f64) {
-    let y = strength.yield_stress(eps_p);
+    if strength.homologous_temperature(st) >= 1.0 {
+        return (Tensor::<D>::zeros(), 0.0);
+    }
+    let y = strength.yield_stress(st);
     let sigma_eq = (1.5 * deviator_norm2(s_trial)).sqrt();
     if sigma_eq <= y {
         return (*s_trial, 0.0);
     }
-    let g = strength.shear_modulus();
-    let eh = strength.hardening_modulus();
-    let d_eps = (sigma_eq - y) / (3.0 * g + eh);
-    let y_new = (y + eh * d_eps).max(0.0);
-    (s_trial * (y_new / sigma_eq), d_eps)
+    let g = strength.shear_modulus(st);
+    if g <= 0.0 {
+        return (Tensor::<D>::zeros(), 0.0);
+    }
+    let at = |d: f64| StrengthState {
+        eps_p: st.eps_p + d,
+        ..*st
+    };
+    // f(Δ) = σ_eq − 3GΔ − Y(εp + Δ): f(0) > 0, f(σ_eq/3G) = −Y ≤ 0, f decreasing.
+    let (mut lo, mut hi) = (0.0, sigma_eq / (3.0 * g));
+    let mut d = 0.0;
+    let mut f = sigma_eq - y;
+    let tol = 1e-12 * sigma_eq;
+    for _ in 0..100 {
+        let slope = 3.0 * g + strength.hardening_modulus(&at(d));
+        let newton = d + f / slope;
+        d = if newton.is_finite() && newton > lo && newton < hi {
+            newton
+        } else {
+            0.5 * (lo + hi)
+        };
+        f = sigma_eq - 3.0 * g * d - strength.yield_stress(&at(d));
+        if f.abs() <= tol || hi - lo <= 1e-15 * hi {
+            break;
+        }
+        if f > 0.0 {
+            lo = d;
+        } else {
+            hi = d;
+        }
+    }
+    let y_new = strength.yield_stress(&at(d)).max(0.0);
+    (s_trial * (y_new / sigma_eq), d)
 }
 
 #[cfg(test)]
@@ -63,6 +163,13 @@ mod tests {
     use super::*;
     use crate::tensor::von_mises;
     use approx::assert_relative_eq;
+
+    pub(crate) fn at(eps_p: f64) -> StrengthState {
+        StrengthState {
+            eps_p,
+            ..StrengthState::REFERENCE
+        }
+    }
 
     #[test]
     fn returns_to_the_yield_surface_3d() {
@@ -72,7 +179,7 @@ mod tests {
             hardening_modulus: 1e9,
         };
         let s = Tensor::<3>::new(4e8, 1e8, 0.0, 1e8, -1e8, 5e7, 0.0, 5e7, -3e8);
-        let (out, d) = radial_return(&s, 0.1, &m);
+        let (out, d) = radial_return(&s, &at(0.1), &m);
         let y_new = 0.3e9 + 1e9 * (0.1 + d);
         assert_relative_eq!(von_mises(&out), y_new, max_relative = 1e-12);
         // Consistency: σ_eq* − 3G Δεp equals the new yield stress.
@@ -90,9 +197,9 @@ mod tests {
         };
         // In-plane deviator with S_zz = −(S_xx + S_yy) = −6e7: σ_eq = √(3/2 (4²+2²+6²))e7 ≈ 9.17e7 < Y.
         let s = Tensor::<2>::new(4e7, 0.0, 0.0, 2e7);
-        assert_eq!(radial_return(&s, 0.0, &m), (s, 0.0));
+        assert_eq!(radial_return(&s, &at(0.0), &m), (s, 0.0));
         // Doubled it yields, and S_zz enters σ_eq.
-        let (out, d) = radial_return(&(s * 2.0), 0.0, &m);
+        let (out, d) = radial_return(&(s * 2.0), &at(0.0), &m);
         assert!(d > 0.0);
         assert_relative_eq!(von_mises(&out), 1e8, max_relative = 1e-12);
     }

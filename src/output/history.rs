@@ -19,6 +19,7 @@ impl HistoryWriter {
     /// Create the file and write the header. Columns: time, dt, kinetic_energy,
     /// internal_energy, contact_energy, gravity_energy, total_energy, momentum_x/y/z,
     /// max_pressure, min_interbody_distance (/Δp_avg; empty with no contact pair in range),
+    /// failed_particles (damage 1),
     /// contact_force_<body>_x/y/z for each body, and penetration_<a>_<b> (Δp_avg) and
     /// mixed_<a>_<b> for each pair of bodies (see `mixing`).
     pub fn create(path: &Path, body_names: &[String]) -> Result<Self> {
@@ -41,6 +42,7 @@ impl HistoryWriter {
             "momentum_z",
             "max_pressure",
             "min_interbody_distance",
+            "failed_particles",
         ]
         .map(String::from)
         .to_vec();
@@ -108,6 +110,7 @@ impl HistoryWriter {
             d.min_interbody_distance
                 .map_or(String::new(), |g| format!("{g:e}")),
         );
+        fields.push(d.failed.to_string());
         for f in &d.body_contact_force {
             fields.extend(f.iter().map(|x| format!("{x:e}")));
         }
@@ -202,7 +205,7 @@ mod tests {
         w.row(&d).unwrap();
         drop(w);
         let h = History::read(&path).unwrap();
-        assert_eq!(h.columns.len(), 12 + 6 + 2);
+        assert_eq!(h.columns.len(), 13 + 6 + 2);
         assert!(h.rows.iter().all(|r| r.len() == h.columns.len()));
         assert_eq!(h.column("contact_force_a,b_y").unwrap(), vec![2.0]);
         assert_eq!(h.column("contact_force_say \"hi\"_z").unwrap(), vec![6.0]);

@@ -51,6 +51,7 @@ fn color_value<const D: usize>(p: &Particles<D>, i: usize, color_by: ColorBy) ->
         ColorBy::Body => p.body[i] as f64,
         ColorBy::Pressure => p.p[i],
         ColorBy::PlasticStrain => p.eps_p[i],
+        ColorBy::Damage => p.damage[i],
         ColorBy::Velocity => p.v[i].norm(),
         ColorBy::Density => p.rho[i],
         ColorBy::VonMises => tensor::von_mises(&p.s[i]),
@@ -418,6 +419,7 @@ fn field_unit(color_by: ColorBy, max_abs: f64) -> (&'static str, &'static str, f
             }
         }
         ColorBy::PlasticStrain => ("plastic strain", "–", 1.0),
+        ColorBy::Damage => ("damage", "–", 1.0),
         ColorBy::Velocity => ("speed |v|", "m/s", 1.0),
         ColorBy::Density => ("density", "kg/m³", 1.0),
     }

@@ -105,7 +105,7 @@ pub fn deviatoric_stress3<const D: usize>(particles: &Particles<D>, i: usize) ->
 }
 
 /// Point-data arrays, in file order: (name, VTK type, components).
-pub const POINT_DATA: [(&str, &str, usize); 13] = [
+pub const POINT_DATA: [(&str, &str, usize); 14] = [
     ("body", "Int32", 1),
     ("id", "Int32", 1),
     ("velocity", "Float64", 3),
@@ -115,6 +115,7 @@ pub const POINT_DATA: [(&str, &str, usize); 13] = [
     ("deviatoric_stress", "Float64", 9),
     ("von_mises", "Float64", 1),
     ("plastic_strain", "Float64", 1),
+    ("damage", "Float64", 1),
     ("smoothing_length", "Float64", 1),
     ("contact_force", "Float64", 3),
     ("mass", "Float64", 1),
@@ -149,6 +150,7 @@ fn point_data<'a, const D: usize>(p: &'a Particles<D>) -> Vec<Array<'a>> {
             b.extend_from_slice(&tensor::von_mises(&p.s[i]).to_le_bytes())
         }),
         scalar("plastic_strain", &p.eps_p, n),
+        scalar("damage", &p.damage, n),
         scalar("smoothing_length", &p.h, n),
         float_array("contact_force", n, 3, move |i, b| {
             f64s(b, &crate::particles::to3(&p.contact_force[i]))

@@ -271,6 +271,8 @@ struct Gather<const D: usize> {
     x: [f64; D],
     h: f64,
     body: u32,
+    /// Damage 1: it meets its neighbours only in compression (see below).
+    failed: bool,
     /// Initial spacing Δp = h0/ratio.
     dp: f64,
     v: [f64; D],
@@ -292,6 +294,7 @@ impl<const D: usize> Gather<D> {
             x: [1e100; D],
             h: 0.0,
             body: u32::MAX,
+            failed: false,
             // So that the artificial stress's W(Δp_avg) with any particle is positive (Δp_avg
             // is half the particle's own spacing) and f_ij = W_ij/W(Δp_avg) = 0.
             dp: 0.0,
@@ -374,6 +377,7 @@ fn compute_rates_on<const D: usize, K: Kernel>(
             x: arr(&p.x[i]),
             h: p.h[i],
             body: p.body[i],
+            failed: p.damage[i] >= 1.0,
             dp: p.h0[i] / ratio,
             v: arr(&p.v[i]),
             u: arr(&p.u[i]),
@@ -686,6 +690,18 @@ fn particle_rates<const D: usize, K: Kernel, const ART: bool, const CN: bool>(
                 continue;
             }
             if !inside {
+                continue;
+            }
+        }
+        // A failed particle meets its neighbours only in compression (`material::damage`):
+        // with a failed member, a pair that is separating is no pair at all, for the forces,
+        // the continuity and the velocity gradient alike. So a crack of failed particles cuts
+        // the bodies on either side apart once it is a support wide, instead of passing the
+        // tension across (the decision is the pair's, the same from either side: momentum is
+        // kept).
+        if (gi.failed || gj.failed) && inside {
+            let vij: [f64; D] = std::array::from_fn(|k| gi.v[k] - gj.v[k]);
+            if dot(&vij, &xij) >= 0.0 {
                 continue;
             }
         }

@@ -174,6 +174,8 @@ pub fn expected_contact_pressure(case: &Case, materials: &[Material], a: usize, 
         let s1 = match case.materials[body.material].eos {
             EosSpec::MieGruneisen { s1, .. } => s1,
             EosSpec::Linear { .. } => 0.0,
+            // p ≈ Aμ + Bμ² against a linear Hugoniot's K μ (1 + (2 S1 − 1) μ) to second order.
+            EosSpec::Tillotson(t) => 0.5 * (1.0 + t.big_b / t.big_a),
         };
         (m.rho0, m.sound_speed0(), s1)
     };

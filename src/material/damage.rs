@@ -1,0 +1,260 @@
+//! Damage D ∈ [0, 1] (DESIGN.md §7): a particle with damage D carries (1 − D) of its tension
+//! and of its yield stress, and all of its compression. A failed particle (D = 1) is a fluid
+//! that cannot be pulled: it keeps its mass, momentum and energy, and pushes on its
+//! neighbours only in compression.
+//!
+//! **Fragments do not stick back together.** Between failed particles the SPH pair force is
+//! (σ_i/ρ_i² + σ_j/ρ_j²)·∇W with σ = −p I, p ≥ 0, and the viscosity acts only on approaching
+//! pairs: the sums can push two failed neighbours apart or hold them off, never pull them
+//! together. So fragments separate freely and meet again only in compression — the "failed
+//! neighbours meet only in compression" choice, which needs no new contact sets and no change
+//! to the neighbour search; a fragment of undamaged particles keeps its own cohesion.
+//!
+//! Two models, each optional per material:
+//! - [`Spall`]: deterministic activation at the spall strength σ_s, then crack growth at the
+//!   Grady–Kipp speed c_g = 0.4 c_L (Grady & Kipp 1980, Int. J. Rock Mech. 17, 147; as used in
+//!   SPH by Benz & Asphaug 1994, Icarus 107, 98, eq. 11): while the largest principal stress
+//!   of the particle exceeds σ_s, d(D^⅓)/dt = c_g/R_s with R_s half the particle's spacing. A
+//!   crack crosses a particle in R_s/c_g = 1.25 Δp/c_L, so the spall plane opens in a few
+//!   particle transit times and the tension it held falls to zero behind it.
+//! - [`JohnsonCookFailure`] (Johnson & Cook 1985, Eng. Fract. Mech. 21, 31, eq. 1):
+//!   D += Δεp/ε_f, ε_f = (D1 + D2 exp(D3 σ*))(1 + D4 ln ε̇*)(1 + D5 T*), σ* = −p/σ_eq, ε̇*
+//!   taken as 1 below the reference rate.
+
+use super::params::{Param, ParamError, Parameters, Valid};
+
+/// What the damage models read of a particle after its stress update.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct DamageState {
+    /// Largest principal stress of −p I + S with the EOS's undamaged pressure (tension > 0).
+    pub sigma_1: f64,
+    /// Undamaged pressure (Pa).
+    pub p: f64,
+    /// von Mises stress of the deviator (Pa).
+    pub sigma_eq: f64,
+    /// Plastic strain gained this step.
+    pub d_eps_p: f64,
+    /// Equivalent strain rate (1/s).
+    pub rate: f64,
+    /// Homologous temperature T* ∈ [0, 1] (from the strength model).
+    pub t_star: f64,
+    /// Longitudinal sound speed (m/s).
+    pub c: f64,
+    /// The particle's spacing (m): V^(1/D).
+    pub size: f64,
+}
+
+/// A damage model: the damage after a step of dt from damage d.
+pub trait Damage: Send + Sync + std::fmt::Debug {
+    fn grow(&self, st: &DamageState, d: f64, dt: f64) -> f64;
+}
+
+/// Spall: see the module doc.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Spall {
+    /// σ_s (Pa): the tension at which cracks start to grow.
+    pub strength: f64,
+}
+
+/// The crack speed as a fraction of the longitudinal sound speed (Grady & Kipp 1980).
+pub const CRACK_SPEED: f64 = 0.4;
+
+impl Spall {
+    pub const PARAMS: &'static [Param] = &[Param::required(
+        "spall_strength",
+        "the spall strength σ_s in Pa, e.g. 1.2e9 for aluminium",
+        Valid::Positive,
+    )];
+}
+
+impl Damage for Spall {
+    fn grow(&self, st: &DamageState, d: f64, dt: f64) -> f64 {
+        if st.sigma_1 <= self.strength || d >= 1.0 {
+            return d;
+        }
+        let r = d.cbrt() + CRACK_SPEED * st.c * dt / (0.5 * st.size);
+        r.min(1.0).powi(3)
+    }
+}
+
+/// Johnson–Cook failure: see the module doc.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct JohnsonCookFailure {
+    pub d: [f64; 5],
+    pub reference_strain_rate: f64,
+}
+
+/// The smallest failure strain used: a floor for very high triaxiality where D1 + D2 e^(D3 σ*)
+/// would fall to zero or below (as LS-DYNA's MAT_015 does with its own floor).
+pub const MIN_FAILURE_STRAIN: f64 = 1e-3;
+
+impl Parameters for JohnsonCookFailure {
+    const NAME: &'static str = "johnson_cook";
+    const PARAMS: &'static [Param] = &[
+        Param::required("d1", "D1, e.g. 0.05", Valid::Any),
+        Param::required("d2", "D2, e.g. 3.44", Valid::Any),
+        Param::required("d3", "D3, e.g. -2.12", Valid::Any),
+        Param::optional("d4", "D4 (strain rate), e.g. 0.002", Valid::Any, 0.0),
+        Param::optional("d5", "D5 (temperature), e.g. 0.61", Valid::Any, 0.0),
+        Param::optional(
+            "reference_strain_rate",
+            "reference strain rate ε̇0 in 1/s, e.g. 1.0",
+            Valid::Positive,
+            1.0,
+        ),
+    ];
+
+    fn from_values(v: &[f64]) -> Result<Self, ParamError> {
+        let f = JohnsonCookFailure {
+            d: [v[0], v[1], v[2], v[3], v[4]],
+            reference_strain_rate: v[5],
+        };
+        if f.d[0] + f.d[1] <= 0.0 {
+            return Err(ParamError::new(
+                "d1",
+                format!(
+                    "D1 + D2 = {} : the failure strain at zero triaxiality is not positive",
+                    f.d[0] + f.d[1]
+                ),
+                "e.g. D1 = 0.05, D2 = 3.44 for 4340 steel",
+            ));
+        }
+        Ok(f)
+    }
+
+    fn values(&self) -> Vec<f64> {
+        let mut v = self.d.to_vec();
+        v.push(self.reference_strain_rate);
+        v
+    }
+}
+
+/// Johnson–Cook failure's parameters and, last, an optional spall strength (0: none).
+pub const JOHNSON_COOK_WITH_SPALL: &[Param] = &[
+    JohnsonCookFailure::PARAMS[0],
+    JohnsonCookFailure::PARAMS[1],
+    JohnsonCookFailure::PARAMS[2],
+    JohnsonCookFailure::PARAMS[3],
+    JohnsonCookFailure::PARAMS[4],
+    JohnsonCookFailure::PARAMS[5],
+    Param::optional(
+        "spall_strength",
+        "the spall strength σ_s in Pa (0: none), e.g. 1.2e9",
+        Valid::NonNegative,
+        0.0,
+    ),
+];
+
+impl JohnsonCookFailure {
+    /// ε_f at triaxiality σ* = −p/σ_eq, strain rate and T*.
+    pub fn failure_strain(&self, triaxiality: f64, rate: f64, t_star: f64) -> f64 {
+        let [d1, d2, d3, d4, d5] = self.d;
+        let rate = (rate / self.reference_strain_rate).max(1.0);
+        ((d1 + d2 * (d3 * triaxiality).exp()) * (1.0 + d4 * rate.ln()) * (1.0 + d5 * t_star))
+            .max(MIN_FAILURE_STRAIN)
+    }
+}
+
+impl Damage for JohnsonCookFailure {
+    fn grow(&self, st: &DamageState, d: f64, _dt: f64) -> f64 {
+        if st.d_eps_p <= 0.0 || st.sigma_eq <= 0.0 {
+            return d;
+        }
+        let eps_f = self.failure_strain(-st.p / st.sigma_eq, st.rate, st.t_star);
+        (d + st.d_eps_p / eps_f).min(1.0)
+    }
+}
+
+/// Scales a strength model's yield stress by (1 − D) (see the module doc).
+#[derive(Debug)]
+pub struct Damaged<'a> {
+    pub inner: &'a dyn super::Strength,
+    pub keep: f64,
+}
+
+impl super::Strength for Damaged<'_> {
+    fn shear_modulus(&self, st: &super::StrengthState) -> f64 {
+        self.inner.shear_modulus(st)
+    }
+    /// (1 − D) Y, and 0 for a failed particle also where Y = ∞ (an elastic material).
+    fn yield_stress(&self, st: &super::StrengthState) -> f64 {
+        if self.keep <= 0.0 {
+            0.0
+        } else {
+            self.keep * self.inner.yield_stress(st)
+        }
+    }
+    fn hardening_modulus(&self, st: &super::StrengthState) -> f64 {
+        if self.keep <= 0.0 {
+            0.0
+        } else {
+            self.keep * self.inner.hardening_modulus(st)
+        }
+    }
+    fn homologous_temperature(&self, st: &super::StrengthState) -> f64 {
+        self.inner.homologous_temperature(st)
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use approx::assert_relative_eq;
+
+    fn state(sigma_1: f64) -> DamageState {
+        DamageState {
+            sigma_1,
+            p: -sigma_1,
+            sigma_eq: 0.0,
+            d_eps_p: 0.0,
+            rate: 0.0,
+            t_star: 0.0,
+            c: 5000.0,
+            size: 1e-4,
+        }
+    }
+
+    /// Below σ_s nothing; above it a crack crosses the particle's half spacing at 0.4 c.
+    #[test]
+    fn spall_grows_at_the_crack_speed() {
+        let s = Spall { strength: 1e9 };
+        assert_eq!(s.grow(&state(0.99e9), 0.0, 1e-9), 0.0);
+        let crossing = 0.5 * 1e-4 / (0.4 * 5000.0);
+        let half = s.grow(&state(1.5e9), 0.0, 0.5 * crossing);
+        assert_relative_eq!(half, 0.125, max_relative = 1e-12);
+        assert_eq!(s.grow(&state(1.5e9), half, 0.5 * crossing), 1.0);
+        // Once grown it stays, also in compression.
+        assert_eq!(s.grow(&state(-5e9), 0.3, 1e-6), 0.3);
+    }
+
+    #[test]
+    fn johnson_cook_failure_strain() {
+        // 4340 steel (Johnson & Cook 1985).
+        let f = JohnsonCookFailure::from_pairs(&[
+            ("d1", 0.05),
+            ("d2", 3.44),
+            ("d3", -2.12),
+            ("d4", 0.002),
+            ("d5", 0.61),
+        ]);
+        let by_hand = (0.05 + 3.44 * (-2.12f64 / 3.0).exp()) * (1.0 + 0.002 * 1e3f64.ln()) * 1.3;
+        let eps_f = f.failure_strain(1.0 / 3.0, 1e3, 0.3 / 0.61);
+        assert_relative_eq!(eps_f, by_hand, max_relative = 1e-12);
+        // Uniaxial tension (σ* = 1/3): D reaches 1 at ε_f.
+        let st = DamageState {
+            sigma_1: 1e9,
+            p: -1e9 / 3.0,
+            sigma_eq: 1e9,
+            d_eps_p: 0.25 * eps_f,
+            rate: 1e3,
+            t_star: 0.3 / 0.61,
+            c: 5000.0,
+            size: 1e-4,
+        };
+        let mut d = 0.0;
+        for _ in 0..4 {
+            d = f.grow(&st, d, 1e-9);
+        }
+        assert_relative_eq!(d, 1.0, max_relative = 1e-12);
+    }
+}

@@ -1,0 +1,281 @@
+//! Johnson–Cook strength (Johnson & Cook 1983, 7th Int. Symp. on Ballistics, eq. 1):
+//!
+//!   Y = (A + B εp^n) (1 + C ln ε̇*) (1 − T*^m),
+//!
+//! ε̇* = ε̇/ε̇0 with ε̇ the equivalent total strain rate, taken as 1 below the reference rate
+//! (the rate term never softens, as in Abaqus), and T* = (T − T_room)/(T_melt − T_room) clamped
+//! to [0, 1]; at T* = 1 the material is molten and carries no deviatoric stress.
+//!
+//! **Temperature** comes from the specific internal energy through the specific heat,
+//! T = T_room + e/c_p: every joule of internal energy counts as heat. This is DESIGN.md §7's
+//! "plain" choice, without a cold/thermal split of the EOS. It overstates the temperature a
+//! little where e holds elastic or cold-compression energy (small below about 10 GPa), and
+//! counts all plastic work as heat (a Taylor–Quinney factor of 1, against the usual 0.9).
+
+use super::params::{Param, ParamError, Parameters, Valid};
+use super::strength::{Strength, StrengthState};
+
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct JohnsonCook {
+    pub shear_modulus: f64,
+    pub a: f64,
+    pub b: f64,
+    pub n: f64,
+    pub c: f64,
+    pub m: f64,
+    pub reference_strain_rate: f64,
+    pub room_temperature: f64,
+    pub melt_temperature: f64,
+    pub specific_heat: f64,
+}
+
+impl Parameters for JohnsonCook {
+    const NAME: &'static str = "johnson_cook";
+    const PARAMS: &'static [Param] = &[
+        Param::required(
+            "shear_modulus",
+            "shear modulus G in Pa, e.g. 26e9",
+            Valid::Positive,
+        ),
+        Param::required(
+            "a",
+            "initial yield stress A in Pa, e.g. 806e6",
+            Valid::NonNegative,
+        ),
+        Param::required(
+            "b",
+            "hardening modulus B in Pa, e.g. 614e6",
+            Valid::NonNegative,
+        ),
+        Param::required("n", "hardening exponent n, e.g. 0.168", Valid::Positive),
+        Param::optional(
+            "c",
+            "strain-rate constant C, e.g. 0.0089",
+            Valid::NonNegative,
+            0.0,
+        ),
+        Param::optional(
+            "m",
+            "thermal-softening exponent m, e.g. 1.1",
+            Valid::Positive,
+            1.0,
+        ),
+        Param::optional(
+            "reference_strain_rate",
+            "reference strain rate ε̇0 in 1/s, e.g. 1.0",
+            Valid::Positive,
+            1.0,
+        ),
+        Param::optional(
+            "room_temperature",
+            "room temperature T_room in K, e.g. 293.15",
+            Valid::Positive,
+            293.15,
+        ),
+        Param::required(
+            "melt_temperature",
+            "melting temperature T_melt in K, e.g. 1813",
+            Valid::Positive,
+        ),
+        Param::required(
+            "specific_heat",
+            "specific heat c_p in J/(kg K), e.g. 460",
+            Valid::Positive,
+        ),
+    ];
+
+    fn from_values(v: &[f64]) -> Result<Self, ParamError> {
+        let jc = JohnsonCook {
+            shear_modulus: v[0],
+            a: v[1],
+            b: v[2],
+            n: v[3],
+            c: v[4],
+            m: v[5],
+            reference_strain_rate: v[6],
+            room_temperature: v[7],
+            melt_temperature: v[8],
+            specific_heat: v[9],
+        };
+        if jc.melt_temperature <= jc.room_temperature {
+            return Err(ParamError::new(
+                "melt_temperature",
+                format!(
+                    "the melting temperature {} K is not above the room temperature {} K",
+                    jc.melt_temperature, jc.room_temperature
+                ),
+                "temperatures are in kelvin: e.g. 1813 for steel, 1356 for copper",
+            ));
+        }
+        if jc.a + jc.b <= 0.0 {
+            return Err(ParamError::new(
+                "a",
+                "A and B are both zero: the material has no strength",
+                "give the initial yield stress A (Pa), or use `type = \"hydrodynamic\"`",
+            ));
+        }
+        Ok(jc)
+    }
+
+    fn values(&self) -> Vec<f64> {
+        vec![
+            self.shear_modulus,
+            self.a,
+            self.b,
+            self.n,
+            self.c,
+            self.m,
+            self.reference_strain_rate,
+            self.room_temperature,
+            self.melt_temperature,
+            self.specific_heat,
+        ]
+    }
+}
+
+impl JohnsonCook {
+    /// Temperature T = T_room + e/c_p (K).
+    pub fn temperature(&self, e: f64) -> f64 {
+        self.room_temperature + e / self.specific_heat
+    }
+
+    /// The rate and thermal factors (1 + C ln ε̇*)(1 − T*^m).
+    fn factors(&self, st: &StrengthState) -> f64 {
+        let rate = (st.rate / self.reference_strain_rate).max(1.0);
+        let t = self.homologous_temperature(st);
+        (1.0 + self.c * rate.ln()) * (1.0 - t.powf(self.m))
+    }
+}
+
+impl Strength for JohnsonCook {
+    fn shear_modulus(&self, _st: &StrengthState) -> f64 {
+        self.shear_modulus
+    }
+
+    fn yield_stress(&self, st: &StrengthState) -> f64 {
+        let eps = st.eps_p.max(0.0);
+        ((self.a + self.b * eps.powf(self.n)) * self.factors(st)).max(0.0)
+    }
+
+    fn hardening_modulus(&self, st: &StrengthState) -> f64 {
+        let eps = st.eps_p.max(0.0);
+        let slope = if eps > 0.0 {
+            self.b * self.n * eps.powf(self.n - 1.0)
+        } else if self.n < 1.0 && self.b > 0.0 {
+            f64::INFINITY
+        } else if self.n == 1.0 {
+            self.b
+        } else {
+            0.0
+        };
+        slope * self.factors(st).max(0.0)
+    }
+
+    fn homologous_temperature(&self, st: &StrengthState) -> f64 {
+        ((self.temperature(st.e) - self.room_temperature)
+            / (self.melt_temperature - self.room_temperature))
+            .clamp(0.0, 1.0)
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::material::strength::radial_return;
+    use crate::particles::Tensor;
+    use crate::tensor::von_mises;
+    use approx::assert_relative_eq;
+
+    /// 42CrMo4 (VALIDATION.md §F).
+    pub(crate) fn steel() -> JohnsonCook {
+        JohnsonCook::from_pairs(&[
+            ("shear_modulus", 206.9e9 / 2.6),
+            ("a", 806e6),
+            ("b", 614e6),
+            ("n", 0.168),
+            ("c", 0.0089),
+            ("m", 1.1),
+            ("room_temperature", 293.15),
+            ("melt_temperature", 1813.15),
+            ("specific_heat", 460.0),
+        ])
+    }
+
+    #[test]
+    fn yield_stress_by_hand() {
+        let jc = steel();
+        let st = |eps_p: f64, rate: f64, e: f64| StrengthState {
+            eps_p,
+            rate,
+            e,
+            ..StrengthState::REFERENCE
+        };
+        assert_relative_eq!(
+            jc.yield_stress(&st(0.0, 0.0, 0.0)),
+            806e6,
+            max_relative = 1e-14
+        );
+        // εp = 0.5, ε̇ = 1000/s, 200 K above room: by hand.
+        let e = 200.0 * 460.0;
+        let by_hand = (806e6 + 614e6 * 0.5f64.powf(0.168))
+            * (1.0 + 0.0089 * 1000f64.ln())
+            * (1.0 - (200.0f64 / 1520.0).powf(1.1));
+        assert_relative_eq!(
+            jc.yield_stress(&st(0.5, 1000.0, e)),
+            by_hand,
+            max_relative = 1e-14
+        );
+        // Below the reference rate the rate term is 1; at the melting point Y = 0.
+        assert_relative_eq!(
+            jc.yield_stress(&st(0.0, 1e-3, 0.0)),
+            806e6,
+            max_relative = 1e-14
+        );
+        assert_eq!(jc.yield_stress(&st(0.3, 0.0, 1520.0 * 460.0)), 0.0);
+        assert_eq!(
+            jc.homologous_temperature(&st(0.0, 0.0, 2000.0 * 460.0)),
+            1.0
+        );
+        // The slope matches a difference quotient.
+        let s = st(0.2, 1e4, 5e4);
+        let d = 1e-7;
+        let fd = (jc.yield_stress(&st(0.2 + d, 1e4, 5e4))
+            - jc.yield_stress(&st(0.2 - d, 1e4, 5e4)))
+            / (2.0 * d);
+        assert_relative_eq!(jc.hardening_modulus(&s), fd, max_relative = 1e-6);
+        assert!(jc.hardening_modulus(&st(0.0, 0.0, 0.0)).is_infinite());
+    }
+
+    /// The return lands on the hardened surface σ_eq = Y(εp + Δεp) with σ_eq* − 3G Δεp = Y,
+    /// also from εp = 0 where the power law's slope is infinite.
+    #[test]
+    fn return_on_the_power_law_surface() {
+        let jc = steel();
+        let g = jc.shear_modulus;
+        let s = Tensor::<3>::new(2e9, 3e8, 0.0, 3e8, -0.5e9, 1e8, 0.0, 1e8, -1.5e9);
+        for eps0 in [0.0, 0.05, 1.0] {
+            let st = StrengthState {
+                eps_p: eps0,
+                rate: 3e3,
+                e: 1e5,
+                ..StrengthState::REFERENCE
+            };
+            let (out, d) = radial_return(&s, &st, &jc);
+            assert!(d > 0.0);
+            let y = jc.yield_stress(&StrengthState {
+                eps_p: eps0 + d,
+                ..st
+            });
+            assert_relative_eq!(von_mises(&out), y, max_relative = 1e-10);
+            assert_relative_eq!(von_mises(&s) - 3.0 * g * d, y, max_relative = 1e-10);
+        }
+    }
+
+    #[test]
+    fn cross_checks() {
+        let mut v = steel().values();
+        v[8] = 200.0;
+        let err = JohnsonCook::from_values(&v).unwrap_err();
+        assert_eq!(err.key, "melt_temperature");
+    }
+}
