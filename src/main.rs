@@ -57,6 +57,11 @@ enum Command {
         #[arg(long = "case", value_name = "NAME")]
         cases: Vec<String>,
     },
+    /// List the library materials: every model, value and source.
+    Materials {
+        /// Only this material (a library name or alias).
+        name: Option<String>,
+    },
     /// Read and validate a deck without running it: particles, h, first time step, memory and
     /// run-time estimates, warnings.
     Check {
@@ -173,6 +178,34 @@ fn main_inner() -> Result<(), (Report, bool)> {
             strike::output::atomic::write(&json, (text + "\n").as_bytes())
                 .map_err(|e| plain(miette!("cannot write {}: {e}", json.display())))?;
             say!("written to {}", json.display());
+            Ok(())
+        }
+        Command::Materials { name } => {
+            use strike::deck::library;
+            let entries = library::entries();
+            let chosen: Vec<&library::Entry> = match &name {
+                Some(n) => {
+                    let canonical = library::canonical_name(n).ok_or_else(|| {
+                        miette!(
+                            help = format!(
+                                "the library materials are {}",
+                                library::library_names().join(", ")
+                            ),
+                            "unknown library material `{n}`"
+                        )
+                    });
+                    let canonical = canonical.map_err(plain)?;
+                    entries.iter().filter(|e| e.name == canonical).collect()
+                }
+                None => entries.iter().collect(),
+            };
+            for e in chosen {
+                say!("{}", library::describe(e));
+            }
+            say!("References:");
+            for r in library::REFERENCES {
+                say!("  {r}");
+            }
             Ok(())
         }
         Command::Check { case } => {
