@@ -84,11 +84,15 @@ pub fn advance<const D: usize>(
         .zip(p.u[..n].par_iter_mut())
         .zip(p.eh[..n].par_iter_mut())
         .zip(p.damage[..n].par_iter_mut())
+        .zip(p.plastic_work[..n].par_iter_mut())
         .enumerate()
         .for_each(
             |(
                 i,
-                (((((((((((((vh, a), x), rho), e), s), eps_p), h), pr), c), fc), u), eh), dmg),
+                (
+                    (((((((((((((vh, a), x), rho), e), s), eps_p), h), pr), c), fc), u), eh), dmg),
+                    w_p,
+                ),
             )| {
                 let b = body[i] as usize;
                 let mat = model.material_of(body[i]);
@@ -113,7 +117,7 @@ pub fn advance<const D: usize>(
                 let rate = equivalent_strain_rate(grad_v);
                 let mut d_eps = 0.0;
                 if mat.strength.reference_shear_modulus() > 0.0 {
-                    let st = mat.strength_state(*rho, *e, *eps_p, rate, p_eos);
+                    let st = mat.strength_state(*rho, *e, (*eps_p, *w_p), rate, p_eos);
                     let g = mat.strength.shear_modulus(&st);
                     let trial = *s + jaumann_rate(s, grad_v, g) * dt;
                     let damaged = Damaged {
@@ -124,10 +128,13 @@ pub fn advance<const D: usize>(
                     *s = s_new;
                     d_eps = d;
                     *eps_p += d;
+                    // The work of the flow stress on the plastic strain (the return ends on the
+                    // yield surface: σ_eq = Y).
+                    *w_p += von_mises(s) * d / *rho;
                 }
                 if !mat.damage.is_empty() && *dmg < 1.0 {
                     let sigma = *s - Tensor::<D>::identity() * p_eos;
-                    let st = mat.strength_state(*rho, *e, *eps_p, rate, p_eos);
+                    let st = mat.strength_state(*rho, *e, (*eps_p, *w_p), rate, p_eos);
                     let volume = m[i] / *rho;
                     let state = DamageState {
                         sigma_1: max_principal(&sigma, out_of_plane(s) - p_eos),

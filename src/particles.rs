@@ -32,6 +32,7 @@ macro_rules! for_each_field {
             h,
             h0,
             eps_p,
+            plastic_work,
             damage,
             body,
             id,
@@ -76,6 +77,9 @@ pub struct Particles<const D: usize> {
     pub h0: Vec<f64>,
     /// Equivalent plastic strain εp.
     pub eps_p: Vec<f64>,
+    /// Plastic work per unit mass w_p = Σ σ_eq Δεp / ρ (J/kg): the heat source of the models
+    /// with adiabatic heating (Johnson–Cook).
+    pub plastic_work: Vec<f64>,
     /// Damage D ∈ [0, 1] (see `material::damage`); 1: failed.
     pub damage: Vec<f64>,
     /// Body index (into the case's bodies).
@@ -127,6 +131,7 @@ impl<const D: usize> Particles<D> {
         self.h.push(h);
         self.h0.push(h);
         self.eps_p.push(0.0);
+        self.plastic_work.push(0.0);
         self.damage.push(0.0);
         self.body.push(body);
         self.id.push(id);

@@ -198,6 +198,7 @@ end_time = 2.0e-6
 viscosity = { alpha = 0.0, beta = 0.0 }
 [materials.al]
 library = "al_1100_o"
+damage = { type = "none" }
 [[body]]
 name = "flyer"
 material = "al"

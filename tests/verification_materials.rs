@@ -178,3 +178,123 @@ fn flyer_plate_spall_gives_back_the_spall_strength() {
         "no spall, yet the free face stays at {u_min}"
     );
 }
+
+/// What a Taylor-bar run gives at 80 µs: (final length, impact-face diameter, peak plastic
+/// strain) of the rod (body 0), lengths in m. The length runs over the rod's particles from the
+/// lowest to the highest plus one spacing; the face diameter is twice the largest radius among
+/// the particles within 0.6 Δp of the rod's lowest, plus one spacing (each particle stands for
+/// a cell Δp across).
+fn taylor_run(case: &Case) -> (f64, f64, f64) {
+    let mut sim = Simulation::<3>::new(case).unwrap();
+    let end = case.simulation.end_time;
+    while sim.state.time < end * (1.0 - 1e-12) {
+        sim.step(end - sim.state.time).unwrap();
+    }
+    let dp = case.bodies[0].spacing;
+    let p = &sim.particles;
+    let rod: Vec<usize> = (0..p.n_real).filter(|&i| p.body[i] == 0).collect();
+    let z = |i: usize| p.x[i][2];
+    let lo = rod.iter().map(|&i| z(i)).fold(f64::INFINITY, f64::min);
+    let hi = rod.iter().map(|&i| z(i)).fold(f64::NEG_INFINITY, f64::max);
+    let r_face = rod
+        .iter()
+        .filter(|&&i| z(i) < lo + 0.6 * dp)
+        .map(|&i| p.x[i][0].hypot(p.x[i][1]))
+        .fold(0.0, f64::max);
+    let eps = rod.iter().map(|&i| p.eps_p[i]).fold(0.0, f64::max);
+    (hi - lo + dp, 2.0 * r_face + dp, eps)
+}
+
+/// The Taylor bar on a wall made three ways: a symmetry plane (the deck), the rod meeting its
+/// twin through the contact, and a fixed steel body through the contact.
+fn taylor_variants(spacing: f64) -> Vec<(&'static str, Case)> {
+    let mut sym = load("taylor_bar");
+    sym.bodies[0].spacing = spacing;
+    let mut twin = sym.clone();
+    twin.symmetry.retain(|s| s.axis != 2);
+    let mut other = twin.bodies[0].clone();
+    other.name = "twin".into();
+    other.velocity[2] = -other.velocity[2];
+    if let strike::case::Shape::Cylinder { base, .. } = &mut other.shape {
+        base[2] = -32.4e-3;
+    }
+    twin.bodies.push(other);
+    let mut wall = twin.clone();
+    wall.bodies[1] = strike::case::BodySpec {
+        name: "wall".into(),
+        velocity: [0.0; 3],
+        motion: strike::case::Motion::Prescribed,
+        shape: strike::case::Shape::Box {
+            min: [0.0, 0.0, -4.0 * spacing],
+            max: [9.0e-3, 9.0e-3, 0.0],
+        },
+        ..twin.bodies[1].clone()
+    };
+    vec![
+        ("symmetry plane", sym),
+        ("twin", twin),
+        ("fixed wall", wall),
+    ]
+}
+
+/// The published finite-element results for the Taylor bar (DynELA and Abaqus; VALIDATION.md
+/// §F): final length 26.52–26.56 mm, impact-face diameter 11.15–11.22 mm, peak plastic strain
+/// 1.78–1.84. The middles of the ranges.
+const TAYLOR_LENGTH: f64 = 26.54e-3;
+const TAYLOR_FACE: f64 = 11.185e-3;
+const TAYLOR_EPS: f64 = 1.81;
+
+fn taylor_report(label: &str, spacing: f64, (l, d, eps): (f64, f64, f64)) {
+    println!(
+        "Taylor bar, {label}, Δp = {:.1} mm: length {:.3} mm ({:+.2} %), face diameter {:.3} mm ({:+.2} %), peak εp {eps:.3} ({:+.1} %)",
+        spacing * 1e3,
+        l * 1e3,
+        100.0 * (l / TAYLOR_LENGTH - 1.0),
+        d * 1e3,
+        100.0 * (d / TAYLOR_FACE - 1.0),
+        100.0 * (eps / TAYLOR_EPS - 1.0)
+    );
+}
+
+/// Issue 13, item 6 (Taylor bar, Johnson–Cook), what holds today: 42CrMo4 at 287 m/s on a
+/// frictionless rigid wall (the symmetry plane z = 0), quarter model, R0/Δp = 8: the final
+/// length within 2 % of the finite-element results (26.98 mm, +1.7 %; about 26.66 mm, +0.5 %,
+/// at R0/Δp = 16 by hand). The impact-face diameter does not converge to them yet (+4.7 % here,
+/// +15 % at R0/Δp = 16; the rod's twin through the contact +5.1 % and +13 %): see
+/// [`taylor_bar_converges_and_its_walls_agree`] and the README.
+#[test]
+fn taylor_bar_final_length_matches_the_finite_element_results() {
+    let spacing = 0.4e-3;
+    let (label, case) = taylor_variants(spacing).swap_remove(0);
+    let (l, d, eps) = taylor_run(&case);
+    taylor_report(label, spacing, (l, d, eps));
+    assert!((l / TAYLOR_LENGTH - 1.0).abs() < 0.02, "length {l}");
+}
+
+/// Issue 13, items 5 and 6: the Taylor bar at R0/Δp = 8 and 16, on the symmetry plane, against
+/// its twin through the contact and on a fixed steel wall through the contact: the three must
+/// agree within 2 % in final length and face diameter, and converge to the finite-element
+/// results. About half an hour on 2 cores:
+/// `cargo test --release --test verification_materials -- --ignored`. It fails today: the face
+/// diameter moves away from the reference with refinement (README, "Not yet").
+#[test]
+#[ignore = "long (the validation command), and failing: the Taylor footprint does not converge yet"]
+fn taylor_bar_converges_and_its_walls_agree() {
+    for spacing in [0.4e-3, 0.2e-3] {
+        let runs: Vec<(&str, (f64, f64, f64))> = taylor_variants(spacing)
+            .into_iter()
+            .map(|(label, case)| {
+                let r = taylor_run(&case);
+                taylor_report(label, spacing, r);
+                (label, r)
+            })
+            .collect();
+        let (l0, d0, _) = runs[0].1;
+        for (label, (l, d, _)) in &runs[1..] {
+            assert!((l / l0 - 1.0).abs() < 0.02, "{label}: length {l} vs {l0}");
+            assert!((d / d0 - 1.0).abs() < 0.02, "{label}: face {d} vs {d0}");
+        }
+        assert!((l0 / TAYLOR_LENGTH - 1.0).abs() < 0.02, "length {l0}");
+        assert!((d0 / TAYLOR_FACE - 1.0).abs() < 0.05, "face diameter {d0}");
+    }
+}

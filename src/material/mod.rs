@@ -116,12 +116,21 @@ impl Material {
         }
     }
 
-    /// The strength model's state at (ρ, e) with plastic strain εp, strain rate and pressure p.
-    pub fn strength_state(&self, rho: f64, e: f64, eps_p: f64, rate: f64, p: f64) -> StrengthState {
+    /// The strength model's state at (ρ, e) with plastic strain εp, plastic work w_p, strain
+    /// rate and pressure p.
+    pub fn strength_state(
+        &self,
+        rho: f64,
+        e: f64,
+        (eps_p, w_p): (f64, f64),
+        rate: f64,
+        p: f64,
+    ) -> StrengthState {
         StrengthState {
             eps_p,
             rate,
             e,
+            w_p,
             eta: rho / self.rho0,
             p,
         }
@@ -138,7 +147,7 @@ impl Material {
         let g = if g > 0.0 {
             let p = self.eos.pressure(rho, e);
             self.strength
-                .shear_modulus(&self.strength_state(rho, e, 0.0, 0.0, p))
+                .shear_modulus(&self.strength_state(rho, e, (0.0, 0.0), 0.0, p))
         } else {
             0.0
         };

@@ -12,8 +12,10 @@ pub struct StrengthState {
     pub eps_p: f64,
     /// Equivalent (total, deviatoric) strain rate √(2/3 d′:d′) (1/s).
     pub rate: f64,
-    /// Specific internal energy e (J/kg): models with a temperature take it from e.
+    /// Specific internal energy e (J/kg): Steinberg–Guinan takes its temperature from it.
     pub e: f64,
+    /// Plastic work per unit mass (J/kg): Johnson–Cook takes its temperature from it.
+    pub w_p: f64,
     /// Compression η = ρ/ρ0.
     pub eta: f64,
     /// Pressure p (Pa).
@@ -26,6 +28,7 @@ impl StrengthState {
         eps_p: 0.0,
         rate: 0.0,
         e: 0.0,
+        w_p: 0.0,
         eta: 1.0,
         p: 0.0,
     };
