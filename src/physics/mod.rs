@@ -282,8 +282,6 @@ struct Gather<const D: usize> {
     vol: f64,
     rho: f64,
     c: f64,
-    /// max(p, 0)/ρ²: what a pair with a failed member carries of the particle's stress.
-    pc2: f64,
     /// σ/ρ², its symmetric components in [`SYM`] order (6 loads a neighbour instead of 9).
     sr2: [f64; 6],
 }
@@ -306,7 +304,6 @@ impl<const D: usize> Gather<D> {
             vol: 0.0,
             rho: 1.0,
             c: 0.0,
-            pc2: 0.0,
             sr2: [0.0; 6],
         }
     }
@@ -388,7 +385,6 @@ fn compute_rates_on<const D: usize, K: Kernel>(
             vol: p.m[i] / p.rho[i],
             rho: p.rho[i],
             c: p.c[i],
-            pc2: p.p[i].max(0.0) / (p.rho[i] * p.rho[i]),
             sr2: std::array::from_fn(|k| {
                 let (a, b) = SYM[k];
                 if a < D && b < D {
@@ -697,6 +693,18 @@ fn particle_rates<const D: usize, K: Kernel, const ART: bool, const CN: bool>(
                 continue;
             }
         }
+        // A failed particle meets its neighbours only in compression (`material::damage`):
+        // with a failed member, a pair that is separating is no pair at all, for the forces,
+        // the continuity and the velocity gradient alike. So a crack of failed particles cuts
+        // the bodies on either side apart once it is a support wide, instead of passing the
+        // tension across (the decision is the pair's, the same from either side: momentum is
+        // kept).
+        if (gi.failed || gj.failed) && inside {
+            let vij: [f64; D] = std::array::from_fn(|k| gi.v[k] - gj.v[k]);
+            if dot(&vij, &xij) >= 0.0 {
+                continue;
+            }
+        }
         queue[queued] = j;
         queued += inside as usize;
         if queued == BATCH {
@@ -812,20 +820,9 @@ fn conserve_chunk<const D: usize, K: Kernel, const ART: bool, const CN: bool>(
         let v2 = if near { dot(&vij, &vij) } else { 0.0 };
         s.v2_max[l] = s.v2_max[l].max(v2);
         let mj = gj.m;
-        // A pair with a failed member (`material::damage`) meets only in compression: its
-        // stress term is the two pressures' compressive parts (a crack face carries no tension
-        // and no shear), and while it opens it strains neither particle (a crack's opening is
-        // not the stretch of the material beside it). The pair keeps its force and energy
-        // terms always, with one T_ij for both, so momentum and energy stay exact.
-        let broken = gi.failed || gj.failed;
-        let kin = if broken && dot(&vij, &xij) >= 0.0 {
-            0.0
-        } else {
-            1.0
-        };
-        s.drho[l] += kin * mj * dot(&vij, &grad_i);
+        s.drho[l] += mj * dot(&vij, &grad_i);
         for a in 0..D {
-            let va = kin * vij[a] * gj.vol;
+            let va = vij[a] * gj.vol;
             for b in 0..D {
                 s.grad_v[a][b][l] -= va * grad_i[b];
             }
@@ -844,9 +841,8 @@ fn conserve_chunk<const D: usize, K: Kernel, const ART: bool, const CN: bool>(
         // T_ij ∇W = (σ_i/ρ_i² + σ_j/ρ_j²) ∇W − Π_ij ∇W (+ A_ij ∇W); in CN-SPH the stresses'
         // part is built from both sides, (σ_i/ρ_i²) B_i ∇W + (σ_j/ρ_j²) B_j ∇W (the artificial
         // stress's likewise), and the viscosity stays on the plain ∇W.
-        let pressures = -(gi.pc2 + gj.pc2);
         let mut tg: [f64; D] = std::array::from_fn(|a| {
-            let mut t = 0.0;
+            let mut t = -pi * grad[a];
             for b in 0..D {
                 t += if CN {
                     (sbi[a][b] + sbj[l][a][b]) * grad[b]
@@ -854,8 +850,7 @@ fn conserve_chunk<const D: usize, K: Kernel, const ART: bool, const CN: bool>(
                     (gi.sr2[sym(a, b)] + gj.sr2[sym(a, b)]) * grad[b]
                 };
             }
-            let t = if broken { pressures * grad[a] } else { t };
-            t - pi * grad[a]
+            t
         });
         if ART {
             let (ri, rj) = (&art[i], &art[js[l] as usize]);
