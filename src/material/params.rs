@@ -112,19 +112,25 @@ pub trait Parameters: Sized {
     /// Build from (key, value) pairs with the defaults filled in, as a library does: panics on
     /// a missing or invalid value, which is a bug in the caller's table, never a user's input.
     fn from_pairs(pairs: &[(&str, f64)]) -> Self {
-        let v: Vec<f64> = Self::PARAMS
-            .iter()
-            .map(|p| {
-                let x = pairs
-                    .iter()
-                    .find(|(k, _)| *k == p.key)
-                    .map(|&(_, x)| x)
-                    .or(p.default)
-                    .unwrap_or_else(|| panic!("{}: no value for `{}`", Self::NAME, p.key));
-                assert!(p.valid.accepts(x), "{}: `{}` = {x}", Self::NAME, p.key);
-                x
-            })
-            .collect();
+        let v = values_from_pairs(Self::NAME, Self::PARAMS, pairs);
         Self::from_values(&v).unwrap_or_else(|e| panic!("{}: {}", Self::NAME, e.message))
     }
+}
+
+/// The values of `params` from (key, value) pairs, defaults filled in, for a library's table:
+/// panics on a missing or invalid value (a bug in the table, never a user's input).
+pub fn values_from_pairs(model: &str, params: &[Param], pairs: &[(&str, f64)]) -> Vec<f64> {
+    params
+        .iter()
+        .map(|p| {
+            let x = pairs
+                .iter()
+                .find(|(k, _)| *k == p.key)
+                .map(|&(_, x)| x)
+                .or(p.default)
+                .unwrap_or_else(|| panic!("{model}: no value for `{}`", p.key));
+            assert!(p.valid.accepts(x), "{model}: `{}` = {x}", p.key);
+            x
+        })
+        .collect()
 }

@@ -95,18 +95,7 @@ impl Tillotson {
     /// From ρ0 and (key, value) pairs, for a library: panics on a missing or invalid value, a
     /// bug in the library's table.
     pub fn from_pairs(rho0: f64, pairs: &[(&str, f64)]) -> Self {
-        let v: Vec<f64> = Self::PARAMS
-            .iter()
-            .map(|p| {
-                let x = pairs
-                    .iter()
-                    .find(|(k, _)| *k == p.key)
-                    .map(|&(_, x)| x)
-                    .unwrap_or_else(|| panic!("tillotson: no value for `{}`", p.key));
-                assert!(p.valid.accepts(x), "tillotson: `{}` = {x}", p.key);
-                x
-            })
-            .collect();
+        let v = super::params::values_from_pairs("tillotson", Self::PARAMS, pairs);
         Self::from_values(rho0, &v).unwrap_or_else(|e| panic!("tillotson: {}", e.message))
     }
 
