@@ -34,10 +34,9 @@ pub fn equivalent_strain_rate<const D: usize>(l: &Tensor<D>) -> f64 {
 }
 
 /// Largest principal value of a symmetric stress σ, the plane-strain σ_zz included in 2D (given
-/// as `zz`; ignored in 3D).
+/// as `zz`; ignored in 3D): −λ_min(−σ) in closed form (`physics::correction::min_eigenvalue`).
 pub fn max_principal<const D: usize>(sigma: &Tensor<D>, zz: f64) -> f64 {
-    let (values, _) = symmetric_eigen(sigma);
-    let top = values.iter().copied().fold(f64::NEG_INFINITY, f64::max);
+    let top = -crate::physics::correction::min_eigenvalue(&(-sigma));
     if D == 2 {
         top.max(zz)
     } else {
@@ -93,6 +92,21 @@ pub fn symmetric_eigen<const D: usize>(a: &Tensor<D>) -> ([f64; D], Tensor<D>) {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn largest_principal_value_and_strain_rate() {
+        // diag(3, −1, 2) rotated about z by 30°: still 3; in 2D the plane-strain zz counts.
+        let (c, s_) = (30f64.to_radians().cos(), 30f64.to_radians().sin());
+        let r = Tensor::<3>::new(c, -s_, 0.0, s_, c, 0.0, 0.0, 0.0, 1.0);
+        let a =
+            r * Tensor::<3>::from_diagonal(&nalgebra::Vector3::new(3.0, -1.0, 2.0)) * r.transpose();
+        approx::assert_relative_eq!(max_principal(&a, 0.0), 3.0, max_relative = 1e-12);
+        let b = Tensor::<2>::new(1.0, 0.0, 0.0, -2.0);
+        assert_eq!(max_principal(&b, 5.0), 5.0);
+        // Uniaxial stretching ε̇ along x (3D): √(2/3 d′:d′) = ε̇ · √(2/3 (4/9 + 1/9 + 1/9)) = 2/3 ε̇.
+        let l = Tensor::<3>::new(1.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0);
+        approx::assert_relative_eq!(equivalent_strain_rate(&l), 2.0 / 3.0, max_relative = 1e-14);
+    }
     use approx::assert_relative_eq;
 
     #[test]
