@@ -157,8 +157,8 @@ pub fn advance<const D: usize>(
                 let ratio = mat.rho0 / *rho;
                 let hh = h0[i] * if D == 2 { ratio.sqrt() } else { ratio.cbrt() };
                 *h = hh.clamp(model.h_min_ratio * h0[i], model.h_max_ratio * h0[i]);
-                *pr = mat.damaged_pressure(*rho, *e, *dmg);
-                *c = mat.sound_speed(*rho, *e);
+                *pr = mat.damaged_pressure(p_eos, *dmg);
+                *c = mat.sound_speed_at(*rho, *e, p_eos);
                 *fc = rates.particles[i].contact_force;
             },
         );

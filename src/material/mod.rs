@@ -106,9 +106,10 @@ impl Material {
         self.eos.pressure(rho, e).max(self.p_min)
     }
 
-    /// Pressure carried with damage D: the cut-off, and (1 − D) of any tension.
-    pub fn damaged_pressure(&self, rho: f64, e: f64, d: f64) -> f64 {
-        let p = self.pressure(rho, e);
+    /// Pressure carried with damage D, from the EOS's pressure p_eos: the cut-off, and (1 − D)
+    /// of any tension.
+    pub fn damaged_pressure(&self, p_eos: f64, d: f64) -> f64 {
+        let p = p_eos.max(self.p_min);
         if p < 0.0 {
             p * (1.0 - d)
         } else {
@@ -141,11 +142,15 @@ impl Material {
     /// floored at 1 % of its reference value so that a particle in deep tension (or a
     /// Tillotson vapour) still has a finite signal speed.
     pub fn sound_speed(&self, rho: f64, e: f64) -> f64 {
+        self.sound_speed_at(rho, e, self.eos.pressure(rho, e))
+    }
+
+    /// [`Material::sound_speed`] where the EOS's pressure p at (ρ, e) is known already.
+    pub fn sound_speed_at(&self, rho: f64, e: f64, p: f64) -> f64 {
         let k0 = self.eos.bulk_modulus(self.rho0, 0.0);
         let ks = self.eos.bulk_modulus(rho, e).max(0.01 * k0);
         let g = self.strength.reference_shear_modulus();
         let g = if g > 0.0 {
-            let p = self.eos.pressure(rho, e);
             self.strength
                 .shear_modulus(&self.strength_state(rho, e, (0.0, 0.0), 0.0, p))
         } else {
