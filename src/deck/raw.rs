@@ -165,6 +165,7 @@ pub struct Simulation {
     pub viscosity: Option<Viscosity>,
     pub gravity: Option<S<Vec<f64>>>,
     pub smoothing_bounds: Option<S<Vec<f64>>>,
+    pub smoothing_stretch: Option<S<f64>>,
     pub impact_speed: Num,
 }
 

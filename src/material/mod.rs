@@ -34,6 +34,9 @@ pub struct Material {
     pub artificial_stress: Option<f64>,
     /// Damage models, applied in this order (empty: never fails).
     pub damage: Vec<Box<dyn Damage>>,
+    /// Whether the material flows plastically (a shear modulus and a finite yield stress): its
+    /// particles' h follows their stretch (`integrate::smoothing_length`).
+    pub flows: bool,
 }
 
 impl Material {
@@ -90,10 +93,13 @@ impl Material {
         if let Some(f) = spec.damage.johnson_cook {
             damage.push(Box::new(f));
         }
+        let flows = strength.reference_shear_modulus() > 0.0
+            && strength.reference_yield_stress().is_finite();
         Material {
             name: spec.name.clone(),
             rho0,
             eos,
+            flows,
             strength,
             p_min: spec.pressure_cutoff.unwrap_or(f64::NEG_INFINITY),
             artificial_stress: spec.artificial_stress,

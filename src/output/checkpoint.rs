@@ -15,7 +15,7 @@ use serde::{Deserialize, Serialize};
 use std::path::Path;
 
 /// Format version, checked on reading.
-pub const FORMAT: u32 = 2;
+pub const FORMAT: u32 = 3;
 
 /// The running totals behind `summary.json`.
 #[derive(Debug, Clone, Default, PartialEq, Serialize, Deserialize)]

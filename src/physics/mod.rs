@@ -102,6 +102,8 @@ pub struct Model<const D: usize> {
     pub smoothing_ratio: f64,
     pub h_min_ratio: f64,
     pub h_max_ratio: f64,
+    /// The most h grows with the material's stretch (see `integrate::smoothing_length`).
+    pub smoothing_stretch: f64,
     /// The colour contact law's tables, where a pair of bodies uses it.
     pub colour: Option<ColourLaw>,
     /// Conventional SPH, or CN-SPH's corrected gradients.

@@ -69,6 +69,7 @@ pub fn build<const D: usize>(case: &Case) -> Result<(Particles<D>, Model<D>)> {
         smoothing_ratio: s.smoothing_ratio,
         h_min_ratio: s.h_min_ratio,
         h_max_ratio: s.h_max_ratio,
+        smoothing_stretch: s.smoothing_stretch,
         colour: None,
         formulation: s.formulation,
     };
