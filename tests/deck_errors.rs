@@ -296,6 +296,15 @@ fn out_of_range_values() {
         "simulation.cfl",
         4,
     );
+    let (message, _) = deck_error(
+        &edit(
+            "end_time = 2.0e-7",
+            "end_time = 2.0e-7\nsmoothing_stretch = 0.8",
+        ),
+        "simulation.smoothing_stretch",
+        4,
+    );
+    assert!(message.contains("must be in [1.0, 2.0]"), "{message}");
     deck_error(
         &edit("type = \"contact\"", "type = \"contact\"\nexponent = 20.0"),
         "interaction[0].exponent",

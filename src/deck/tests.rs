@@ -86,6 +86,7 @@ fn full_3d_deck() {
     assert_eq!((s.viscosity_alpha, s.viscosity_beta), (1.0, 2.0));
     assert_eq!(s.gravity, [0.0; 3]);
     assert_eq!((s.h_min_ratio, s.h_max_ratio), (0.5, 2.0));
+    assert_eq!(s.smoothing_stretch, 1.25);
     assert_eq!(s.impact_speed, Some(7000.0));
 
     // Deck materials in order, then the library ones bodies name directly (once).
@@ -264,6 +265,7 @@ smoothing_ratio = 1.3
 viscosity = { alpha = 0.5, beta = 0.0 }
 gravity = [0.0, -9.8]
 smoothing_bounds = [0.25, 4.0]
+smoothing_stretch = 1.0
 
 [materials.rubber]
 density = 1010.0
@@ -343,6 +345,7 @@ fn full_2d_deck() {
     assert_eq!((s.viscosity_alpha, s.viscosity_beta), (0.5, 0.0));
     assert_eq!(s.gravity, [0.0, -9.8, 0.0]);
     assert_eq!((s.h_min_ratio, s.h_max_ratio), (0.25, 4.0));
+    assert_eq!(s.smoothing_stretch, 1.0);
     assert_eq!(s.impact_speed, None);
 
     let names: Vec<&str> = case.materials.iter().map(|m| m.name.as_str()).collect();
