@@ -302,11 +302,13 @@ fn taylor_bar_final_length_matches_the_finite_element_results() {
 /// contact agree within 2 % in final length and face diameter; both errors shrink with
 /// refinement, and at R0/Δp = 16 the final length is within 2 % (steel; the tolerance)
 /// and 4 % (copper: the published codes spread by 0.3 %, the rest is our lattice's, half a
-/// spacing of it the length's measure) and the
-/// face diameter within 5 % of the published results. About an hour on 2
-/// cores: `cargo test --release --test verification_materials -- --ignored`.
+/// spacing of it the length's measure) and the face diameter within 5 % of the published
+/// results. About an hour on 2 cores:
+/// `cargo test --release --test verification_materials -- --ignored`. It fails today on the walls: the twin's face diameter is −1.4 % of the symmetry plane's at
+/// R0/Δp = 8 but +3.2 % at 16 (steel), and −5.9 % at R0/Δp = 8 for copper; the lengths agree
+/// within 0.6 %.
 #[test]
-#[ignore = "long: the validation command"]
+#[ignore = "long (the validation command), and failing: the walls disagree on the footprint (README, Not yet)"]
 fn taylor_bars_converge_and_their_walls_agree() {
     for (deck, reference, length_tolerance) in [
         ("taylor_bar", &STEEL, 0.02),
