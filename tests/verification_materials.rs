@@ -285,7 +285,7 @@ fn taylor_report(
 /// Issue 13, item 6 (Taylor bar, Johnson–Cook): 42CrMo4 at 287 m/s on a frictionless rigid
 /// wall (the symmetry plane z = 0), quarter model, R0/Δp = 8, against the finite-element
 /// results: the final length within 2 % (27.02 mm, +1.8 %) and the impact-face diameter, which
-/// converges to them from below as the lattice is refined (−8.2 % here, +0.1 % at R0/Δp = 16:
+/// converges to them from below as the lattice is refined (−8.5 % here, −0.2 % at R0/Δp = 16:
 /// [`taylor_bars_converge_and_their_walls_agree`]), within 10 % at this coarse resolution.
 #[test]
 fn taylor_bar_final_length_matches_the_finite_element_results() {
@@ -304,8 +304,9 @@ fn taylor_bar_final_length_matches_the_finite_element_results() {
 /// and 4 % (copper: the published codes spread by 0.3 %, the rest is our lattice's, half a
 /// spacing of it the length's measure) and the face diameter within 5 % of the published
 /// results. About an hour on 2 cores:
-/// `cargo test --release --test verification_materials -- --ignored`. It fails today on the walls: the twin's face diameter is −1.4 % of the symmetry plane's at
-/// R0/Δp = 8 but +3.2 % at 16 (steel), and −5.9 % at R0/Δp = 8 for copper; the lengths agree
+/// `cargo test --release --test verification_materials -- --ignored`. It fails today on the
+/// walls: the twin's face diameter is −1.4 % of the symmetry plane's at R0/Δp = 8 but +3.2 % at
+/// 16 (steel; the fixed wall's +3.0 %), and −5.9 % at R0/Δp = 8 for copper; the lengths agree
 /// within 0.6 %.
 #[test]
 #[ignore = "long (the validation command), and failing: the walls disagree on the footprint (README, Not yet)"]
