@@ -65,7 +65,7 @@ pub fn predict_velocity<const D: usize>(p: &mut Particles<D>, model: &Model<D>, 
 pub fn smoothing_length<const D: usize>(
     h0: f64,
     rho0_over_rho: f64,
-    b: &Tensor<D>,
+    lambda_max: f64,
     model: &Model<D>,
 ) -> f64 {
     let density = if D == 2 {
@@ -73,7 +73,7 @@ pub fn smoothing_length<const D: usize>(
     } else {
         rho0_over_rho.cbrt()
     };
-    let stretch = largest_stretch(b).clamp(1.0, model.smoothing_stretch);
+    let stretch = lambda_max.clamp(1.0, model.smoothing_stretch);
     (h0 * density * stretch).clamp(model.h_min_ratio * h0, model.h_max_ratio * h0)
 }
 
@@ -214,10 +214,14 @@ pub fn advance<const D: usize>(
                         *s = Tensor::<D>::zeros();
                     }
                 }
-                if mat.flows {
+                // b stays the identity (λ_max = 1) in a material that does not flow.
+                let lambda_max = if mat.flows {
                     *bb = stretch_step(bb, grad_v, dt);
-                }
-                *h = smoothing_length::<D>(h0[i], mat.rho0 / *rho, bb, model);
+                    largest_stretch(bb)
+                } else {
+                    1.0
+                };
+                *h = smoothing_length::<D>(h0[i], mat.rho0 / *rho, lambda_max, model);
                 *pr = mat.damaged_pressure(p_eos, *dmg);
                 *c = mat.sound_speed_at(*rho, *e, p_eos);
                 *fc = rates.particles[i].contact_force;
