@@ -216,6 +216,8 @@ pub enum Shape {
         inner_radius: f64,
         outer_radius: f64,
     },
+    /// 3D closed triangulated surface (an STL file, placed).
+    Mesh(std::sync::Arc<crate::setup::mesh::Mesh>),
 }
 
 /// How two bodies meet.

@@ -61,6 +61,7 @@ pub fn estimate_particles(shape: &Shape, spacing: f64, dimension: usize) -> f64 
             outer_radius: ro,
             ..
         } => 4.0 / 3.0 * PI * (ro.powi(3) - ri.powi(3)),
+        Shape::Mesh(m) => m.volume,
     };
     measure / spacing.powi(dimension as i32)
 }
@@ -944,7 +945,7 @@ impl Ctx<'_> {
         let types: &[&str] = if dim == 2 {
             &["rectangle", "box", "disc", "ring"]
         } else {
-            &["box", "sphere", "cylinder", "ring"]
+            &["box", "sphere", "cylinder", "ring", "stl"]
         };
         let Some(kind) = &r.kind else {
             return Err(self.missing(
@@ -972,11 +973,15 @@ impl Ctx<'_> {
                     format!("a {} is a 2D shape, but the deck is 3D", kind.get_ref()),
                     "in 3D use `type = \"sphere\"` (center, radius) or `type = \"box\"` (min, max)",
                 )),
-                "cylinder" if dim == 2 => {
+                "cylinder" | "stl" if dim == 2 => {
                     return Err(self.fail(
                         kind.span(),
                         type_key,
-                        "a cylinder is a 3D shape, but the deck is 2D",
+                        format!(
+                            "a{} {} is a 3D shape, but the deck is 2D",
+                            if kind.get_ref() == "stl" { "n" } else { "" },
+                            kind.get_ref()
+                        ),
                         "in 2D (plane strain) use `type = \"rectangle\"` (min, max)",
                     ))
                 }
@@ -992,11 +997,16 @@ impl Ctx<'_> {
             ("length", span_of(&r.length)),
             ("inner_radius", span_of(&r.inner_radius)),
             ("outer_radius", span_of(&r.outer_radius)),
+            ("file", span_of(&r.file)),
+            ("scale", span_of(&r.scale)),
+            ("rotate", span_of(&r.rotate)),
+            ("translate", span_of(&r.translate)),
         ];
         let allowed: &[&str] = match kind_name {
             "box" | "rectangle" => &["type", "min", "max"],
             "sphere" | "disc" => &["type", "center", "radius"],
             "cylinder" => &["type", "base", "axis", "radius", "length"],
+            "stl" => &["type", "file", "scale", "rotate", "translate"],
             _ => &["type", "center", "inner_radius", "outer_radius"],
         };
         self.forbid(prefix, &fields, allowed, &format!("a {kind_name} shape"))?;
@@ -1031,6 +1041,7 @@ impl Ctx<'_> {
             }
         };
         Ok(match kind_name {
+            "stl" => self.stl(r, prefix, &at)?,
             "box" | "rectangle" => {
                 let min = vec(&r.min, "min")?;
                 let max = vec(&r.max, "max")?;
@@ -1110,6 +1121,65 @@ impl Ctx<'_> {
                 }
             }
         })
+    }
+
+    /// An STL surface: read, placed and built into its tree here, so that a missing or damaged
+    /// file is reported at the deck's `file` key.
+    fn stl(&self, r: &raw::Shape, prefix: &str, at: &Range<usize>) -> Result<Shape> {
+        use crate::setup::mesh::{Mesh, Placement};
+        let file_key = format!("{prefix}.file");
+        let Some(file) = &r.file else {
+            return Err(self.missing(
+                at,
+                &file_key,
+                "an stl shape needs the surface's file",
+                "add `file = \"projectile.stl\"` (ASCII or binary STL; relative to the deck's folder)",
+            ));
+        };
+        let scale = match &r.scale {
+            Some(v) => self.positive(
+                v,
+                &format!("{prefix}.scale"),
+                "the factor from the file's units to m, e.g. 1e-3 for mm",
+            )?,
+            None => 1.0,
+        };
+        let ex = "[0.0, 0.0, 0.0]";
+        let rotate_deg = match &r.rotate {
+            Some(v) => self.vector(v, &format!("{prefix}.rotate"), 3, ex)?,
+            None => [0.0; 3],
+        };
+        let translate = match &r.translate {
+            Some(v) => self.vector(v, &format!("{prefix}.translate"), 3, ex)?,
+            None => [0.0; 3],
+        };
+        let name = file.get_ref();
+        let path = Path::new(self.file)
+            .parent()
+            .unwrap_or(Path::new(""))
+            .join(name);
+        let placement = Placement {
+            scale,
+            rotate_deg,
+            translate,
+        };
+        let mesh = Mesh::read(&path, name, &placement).map_err(|e| {
+            self.fail(
+                file.span(),
+                file_key.clone(),
+                format!("{e} (looked for {})", path.display()),
+                "give an ASCII or binary STL file, its path relative to the deck's folder",
+            )
+        })?;
+        if mesh.volume == 0.0 {
+            return Err(self.fail(
+                file.span(),
+                file_key,
+                format!("the surface in {name} encloses no volume"),
+                "give a closed surface (a solid's outer skin)",
+            ));
+        }
+        Ok(Shape::Mesh(std::sync::Arc::new(mesh)))
     }
 
     fn check_memory(
@@ -1519,6 +1589,12 @@ fn smallest_size(shape: &Shape, dim: usize) -> (f64, &'static str) {
             outer_radius,
             ..
         } => (outer_radius - inner_radius, "wall thickness"),
+        Shape::Mesh(m) => (
+            (0..3)
+                .map(|k| m.max[k] - m.min[k])
+                .fold(f64::INFINITY, f64::min),
+            "smallest side of the surface's bounding box",
+        ),
     }
 }
 

@@ -262,6 +262,10 @@ pub struct Shape {
     pub length: Num,
     pub inner_radius: Num,
     pub outer_radius: Num,
+    pub file: Option<S<String>>,
+    pub scale: Num,
+    pub rotate: Option<S<Vec<f64>>>,
+    pub translate: Option<S<Vec<f64>>>,
 }
 
 #[derive(Debug, serde::Deserialize)]

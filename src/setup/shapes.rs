@@ -14,11 +14,13 @@
 
 use crate::boundary::Plane;
 use crate::case::Shape;
-use crate::particles::Vector;
+use crate::particles::{from3, Vector};
+use rayon::prelude::*;
 
 /// Bounding box (min, max) of a shape in 3 components (z of 2D shapes is ignored by callers).
 pub fn bounding_box(shape: &Shape) -> ([f64; 3], [f64; 3]) {
     match *shape {
+        Shape::Mesh(ref m) => (m.min, m.max),
         Shape::Box { min, max } => (min, max),
         Shape::Sphere { center, radius }
         | Shape::Ring {
@@ -50,6 +52,7 @@ pub fn bounding_box(shape: &Shape) -> ([f64; 3], [f64; 3]) {
 pub fn contains<const D: usize>(shape: &Shape, x: &Vector<D>) -> bool {
     let c3 = |a: [f64; 3]| Vector::<D>::from_fn(|k, _| a[k]);
     match *shape {
+        Shape::Mesh(ref m) => m.contains(crate::particles::to3(x)),
         Shape::Box { min, max } => (0..D).all(|k| x[k] >= min[k] && x[k] <= max[k]),
         Shape::Sphere { center, radius } => (x - c3(center)).norm() <= radius,
         Shape::Ring {
@@ -87,21 +90,26 @@ pub fn lattice<const D: usize>(shape: &Shape, dp: f64, planes: &[Plane]) -> Vec<
         // A relative tolerance keeps a box of exactly n spacings at n layers.
         count[k] = ((hi[k] - origin[k]) / dp + 1e-9).floor().max(0.0) as usize;
     }
-    let mut out = Vec::new();
     let (nx, ny, nz) = (count[0], count[1], if D == 3 { count[2] } else { 1 });
-    for a in 0..nx {
-        for b in 0..ny {
-            for c in 0..nz {
-                let idx = [a, b, c];
-                let x = Vector::<D>::from_fn(|k, _| origin[k] + (idx[k] as f64 + 0.5) * dp);
-                let on_model_side = planes.iter().all(|p| p.depth(x[p.axis]) >= 0.0);
-                if on_model_side && contains(shape, &x) {
-                    out.push(conform(shape, x, dp));
+    // In lattice order (x slowest), in parallel over x-slices: a surface mesh's inside test
+    // costs a tree walk per point.
+    (0..nx)
+        .into_par_iter()
+        .flat_map_iter(|a| {
+            let mut slice = Vec::new();
+            for b in 0..ny {
+                for c in 0..nz {
+                    let idx = [a, b, c];
+                    let x = Vector::<D>::from_fn(|k, _| origin[k] + (idx[k] as f64 + 0.5) * dp);
+                    let on_model_side = planes.iter().all(|p| p.depth(x[p.axis]) >= 0.0);
+                    if on_model_side && contains(shape, &x) {
+                        slice.push(conform(shape, x, dp));
+                    }
                 }
             }
-        }
-    }
-    out
+            slice
+        })
+        .collect()
 }
 
 /// A lattice point of a curved shape within Δp of its surface, moved along the surface normal
@@ -113,6 +121,18 @@ pub fn conform<const D: usize>(shape: &Shape, x: Vector<D>, dp: f64) -> Vector<D
     // The nearest surface: its depth below it and its outward normal.
     let (depth, normal) = match *shape {
         Shape::Box { .. } => return x,
+        Shape::Mesh(ref m) => {
+            let p = crate::particles::to3(&x);
+            let Some(q) = m.nearest(p, dp) else {
+                return x;
+            };
+            let out = from3::<D>(q) - x;
+            let d = out.norm();
+            if d == 0.0 {
+                return x;
+            }
+            (d, out / d)
+        }
         Shape::Sphere { center, radius } => {
             let d = x - c3(center);
             let r = d.norm();
