@@ -517,7 +517,16 @@ impl<const D: usize> Simulation<D> {
                         i,
                         "acceleration or strain rate is not finite (NaN/inf)".to_string(),
                     ))
-                } else if p.rho[i] + dt * r[i].drho <= 0.0 || (p.rho[i] + dt * r[i].drho).is_nan() {
+                } else if integrate::next_density(
+                    self.model.material_of(p.body[i]),
+                    p.rho[i],
+                    dt * r[i].drho,
+                    p.e[i],
+                    p.damage[i] >= 1.0,
+                )
+                .partial_cmp(&0.0)
+                    != Some(std::cmp::Ordering::Greater)
+                {
                     Some((
                         i,
                         format!(

@@ -352,3 +352,66 @@ fn taylor_bars_converge_and_their_walls_agree() {
         }
     }
 }
+
+/// Rubble keeps its energy and its density. A cube of failed aluminium (every particle at
+/// damage 1: it pushes but cannot pull) with random velocities of ±20 m/s and no mean motion:
+/// its particles knock into each other and drift apart. Energy must stay within 0.5 % and no
+/// particle may be compressed by more than a 20 m/s knock does (Δρ/ρ ≈ v/c ≈ 0.4 %), at
+/// most 2 %. With the separating pairs of failed particles dropped from the continuity
+/// equation (strike's first rule) the density ratcheted up at every knock: 1.4 ρ0 and 65 GPa
+/// in the rubble of `examples/ogive_plate.toml`, and its energy grew by 10 %.
+#[test]
+fn rubble_keeps_its_energy_and_density() {
+    let deck = r#"
+[simulation]
+dimension = 3
+end_time = 3.0e-5
+
+[[body]]
+name = "rubble"
+material = "al_6061_t6"
+spacing = 1.0e-3
+shape = { type = "box", min = [0.0, 0.0, 0.0], max = [0.01, 0.01, 0.01] }
+"#;
+    let case = strike::deck::parse(deck, "rubble.toml").unwrap();
+    let mut sim = Simulation::<3>::new(&case).unwrap();
+    let rho0 = sim.particles.rho[0];
+    let n = sim.particles.n_real;
+    let mut seed = 12345u64;
+    let mut random = || {
+        seed = seed.wrapping_mul(6364136223846793005).wrapping_add(1442695040888963407);
+        (seed >> 11) as f64 / (1u64 << 53) as f64 * 2.0 - 1.0
+    };
+    for i in 0..n {
+        sim.particles.damage[i] = 1.0;
+        for k in 0..3 {
+            sim.particles.v[i][k] = 20.0 * random();
+        }
+    }
+    // No mean motion.
+    let mean: Vec<f64> = (0..3)
+        .map(|k| (0..n).map(|i| sim.particles.v[i][k]).sum::<f64>() / n as f64)
+        .collect();
+    for i in 0..n {
+        for k in 0..3 {
+            sim.particles.v[i][k] -= mean[k];
+        }
+        sim.particles.vh[i] = sim.particles.v[i];
+    }
+    let end = case.simulation.end_time;
+    let (mut e0, mut drift, mut rho_max) = (None, 0.0_f64, 0.0_f64);
+    while sim.state.time < end * (1.0 - 1e-12) {
+        let d = sim.step(end - sim.state.time).unwrap();
+        let e0 = *e0.get_or_insert(d.total);
+        drift = drift.max((d.total - e0).abs() / e0);
+        rho_max = (0..n).map(|i| sim.particles.rho[i]).fold(rho_max, f64::max);
+    }
+    println!(
+        "rubble: {} steps, energy drift {:.3e}, densest {:.4} ρ0",
+        sim.state.step,
+        drift,
+        rho_max / rho0
+    );
+    assert!(drift < 5e-3, "energy drift {drift}");
+    assert!(rho_max / rho0 < 1.02, "densest {}", rho_max / rho0);
+}

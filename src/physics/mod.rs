@@ -247,6 +247,8 @@ struct Pass<'a, const D: usize> {
     art: &'a [Tensor<D>],
     corr: &'a [Corrected<D>],
     colour: &'a [ColourState],
+    /// Pressures (ghosts included): what a pair with a failed member passes on.
+    pressure: &'a [f64],
     model: &'a Model<D>,
 }
 
@@ -437,6 +439,7 @@ fn compute_rates_on<const D: usize, K: Kernel>(
         art: &out.art,
         corr: &out.corr,
         colour,
+        pressure: &p.p,
         model,
     };
     assert!(
@@ -563,6 +566,7 @@ fn particle_rates<const D: usize, K: Kernel, const ART: bool, const CN: bool>(
     let (mut de_contact, mut de_lag_contact, mut mu_contact) = (0.0, 0.0, 0.0_f64);
     let (mut k_backstop, mut k_ahead) = (0.0, 0.0_f64);
     let mut count = 0u32;
+    let (mut cut_acc, mut cut_de, mut cut_de_lag) = ([0.0; D], 0.0, 0.0);
     let mut queue = [padding; BATCH];
     let mut queued = 0;
 
@@ -695,16 +699,19 @@ fn particle_rates<const D: usize, K: Kernel, const ART: bool, const CN: bool>(
                 continue;
             }
         }
-        // A failed particle meets its neighbours only in compression (`material::damage`):
-        // with a failed member, a pair that is separating is no pair at all, for the forces,
-        // the continuity and the velocity gradient alike. So a crack of failed particles cuts
-        // the bodies on either side apart once it is a support wide, instead of passing the
-        // tension across (the decision is the pair's, the same from either side: momentum is
-        // kept).
+        // A pair with a failed member passes on only compression (`material::damage`): its
+        // stress terms lose the tension and the deviator of either side, here, while the pair
+        // stays in the continuity and the velocity gradient like any other, so that density
+        // and energy follow the motion (a pair dropped while it separates lets the density
+        // ratchet up, and its switching makes energy). The cut is the pair's, the same from
+        // either side: momentum is kept.
         if (gi.failed || gj.failed) && inside {
-            let vij: [f64; D] = std::array::from_fn(|k| gi.v[k] - gj.v[k]);
-            if dot(&vij, &xij) >= 0.0 {
-                continue;
+            let cut = tension_cut::<D, K, CN>(kernel, i, j as usize, &xij, pass);
+            let mj = gj.m;
+            for a in 0..D {
+                cut_acc[a] -= cut[a] * mj;
+                cut_de += 0.5 * mj * (gi.v[a] - gj.v[a]) * cut[a];
+                cut_de_lag += 0.5 * mj * (gi.u[a] - gj.u[a]) * cut[a];
             }
         }
         queue[queued] = j;
@@ -747,12 +754,12 @@ fn particle_rates<const D: usize, K: Kernel, const ART: bool, const CN: bool>(
     if k_backstop > 0.0 {
         dt = dt.min(model.cfl * BACKSTOP_STEP * (mi / k_backstop).sqrt());
     }
-    let acc = Vector::<D>::from_fn(|k, _| lane_sum(&sums.acc[k]));
+    let acc = Vector::<D>::from_fn(|k, _| lane_sum(&sums.acc[k]) + cut_acc[k]);
     ParticleRates {
         acc: acc + fc / mi + model.gravity,
         drho: lane_sum(&sums.drho),
-        de: lane_sum(&sums.de) + de_contact,
-        de_lag: lane_sum(&sums.de_lag) + de_lag_contact,
+        de: lane_sum(&sums.de) + de_contact + cut_de,
+        de_lag: lane_sum(&sums.de_lag) + de_lag_contact + cut_de_lag,
         grad_v: Tensor::<D>::from_fn(|a, b| lane_sum(&sums.grad_v[a][b])),
         contact_force: fc,
         contact_energy: phi,
@@ -875,6 +882,42 @@ fn conserve_chunk<const D: usize, K: Kernel, const ART: bool, const CN: bool>(
         s.de[l] -= 0.5 * mj * vtg;
         s.de_lag[l] -= 0.5 * mj * utg;
     }
+}
+
+/// What a pair with a failed member does not pass on: T_ij ∇W with each side's stress term
+/// σ/ρ² (CN-SPH: (σ/ρ²) B) replaced by its tension and deviator, σ/ρ² + max(p, 0)/ρ² I — the
+/// pair force less this keeps only the compressive pressures. A failed particle carries no
+/// tension and no deviator (`material::damage`), so its own part is zero.
+fn tension_cut<const D: usize, K: Kernel, const CN: bool>(
+    kernel: K,
+    i: usize,
+    j: usize,
+    xij: &[f64; D],
+    pass: &Pass<D>,
+) -> [f64; D] {
+    let (gi, gj) = (&pass.gather[i], &pass.gather[j]);
+    let r = dot(xij, xij).sqrt();
+    let gf = kernel.grad_factor::<D>(r, 0.5 * (gi.h + gj.h));
+    let side = |k: usize, g: &Gather<D>| -> [[f64; D]; D] {
+        let squeeze = pass.pressure[k].max(0.0) / (g.rho * g.rho);
+        std::array::from_fn(|a| {
+            std::array::from_fn(|b| {
+                if CN {
+                    pass.corr[k].sb[a][b] + squeeze * pass.corr[k].b[a][b]
+                } else {
+                    g.sr2[sym(a, b)] + if a == b { squeeze } else { 0.0 }
+                }
+            })
+        })
+    };
+    let (ti, tj) = (side(i, gi), side(j, gj));
+    std::array::from_fn(|a| {
+        let mut t = 0.0;
+        for b in 0..D {
+            t += (ti[a][b] + tj[a][b]) * xij[b] * gf;
+        }
+        t
+    })
 }
 
 #[cfg(test)]
