@@ -379,7 +379,9 @@ shape = { type = "box", min = [0.0, 0.0, 0.0], max = [0.01, 0.01, 0.01] }
     let n = sim.particles.n_real;
     let mut seed = 12345u64;
     let mut random = || {
-        seed = seed.wrapping_mul(6364136223846793005).wrapping_add(1442695040888963407);
+        seed = seed
+            .wrapping_mul(6364136223846793005)
+            .wrapping_add(1442695040888963407);
         (seed >> 11) as f64 / (1u64 << 53) as f64 * 2.0 - 1.0
     };
     for i in 0..n {
@@ -393,8 +395,8 @@ shape = { type = "box", min = [0.0, 0.0, 0.0], max = [0.01, 0.01, 0.01] }
         .map(|k| (0..n).map(|i| sim.particles.v[i][k]).sum::<f64>() / n as f64)
         .collect();
     for i in 0..n {
-        for k in 0..3 {
-            sim.particles.v[i][k] -= mean[k];
+        for (k, m) in mean.iter().enumerate() {
+            sim.particles.v[i][k] -= m;
         }
         sim.particles.vh[i] = sim.particles.v[i];
     }
