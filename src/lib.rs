@@ -28,6 +28,7 @@ pub mod physics;
 pub mod run;
 pub mod setup;
 pub mod simulation;
+pub mod sweep;
 pub mod tensor;
 
 pub use error::{Error, Result};

@@ -1,4 +1,4 @@
-//! The `strike` command line: run, check.
+//! The `strike` command line: run, check, sweep, bench, materials.
 
 use clap::{Parser, Subcommand};
 use miette::{miette, LabeledSpan, NamedSource, Report};
@@ -61,6 +61,43 @@ enum Command {
     Materials {
         /// Only this material (a library name or alias).
         name: Option<String>,
+    },
+    /// Run a deck at many values of its numeric keys, or find a projectile's ballistic limit:
+    /// a table (CSV) and plots of each run's outcome (residual velocity and mass behind the
+    /// target, perforation, peak pressure, failed particles).
+    Sweep {
+        /// The case deck (TOML).
+        case: PathBuf,
+        /// A key and its values (repeatable; every combination runs): KEY=a,b,c or
+        /// KEY=start:stop:count, the key by its path, e.g. body.sphere.velocity (a number for a
+        /// vector sets its magnitude), body[1].spacing, materials.al.density.
+        #[arg(long = "set", value_name = "KEY=VALUES")]
+        set: Vec<String>,
+        /// Find the impact speed at which this body (or its debris) perforates the target,
+        /// between the speeds given by --speeds, to --tolerance.
+        #[arg(long, value_name = "BODY")]
+        ballistic_limit: Option<String>,
+        /// The bracket for --ballistic-limit: LOW:HIGH (m/s); LOW must not perforate, HIGH must.
+        #[arg(long, value_name = "LOW:HIGH")]
+        speeds: Option<String>,
+        /// Width of the final bracket (m/s).
+        #[arg(long, default_value_t = 10.0)]
+        tolerance: f64,
+        /// The body whose residual velocity and mass are measured (default: the fastest).
+        #[arg(long)]
+        projectile: Option<String>,
+        /// Runs at once (they share the threads).
+        #[arg(long, default_value_t = 1)]
+        jobs: usize,
+        /// Worker threads in all (default: all cores).
+        #[arg(long)]
+        threads: Option<usize>,
+        /// Output directory (default: runs/<case name>_sweep or _ballistic).
+        #[arg(long)]
+        out: Option<PathBuf>,
+        /// Replace an earlier sweep's files in the output directory.
+        #[arg(long)]
+        overwrite: bool,
     },
     /// Read and validate a deck without running it: particles, h, first time step, memory and
     /// run-time estimates, warnings.
@@ -206,6 +243,93 @@ fn main_inner() -> Result<(), (Report, bool)> {
             for r in library::REFERENCES {
                 say!("  {r}");
             }
+            Ok(())
+        }
+        Command::Sweep {
+            case,
+            set,
+            ballistic_limit,
+            speeds,
+            tolerance,
+            projectile,
+            jobs,
+            threads,
+            out,
+            overwrite,
+        } => {
+            use strike::sweep;
+            let c = load(&case).map_err(plain)?;
+            let text = std::fs::read_to_string(&case)
+                .map_err(|e| plain(miette!("cannot read {}: {e}", case.display())))?;
+            let file = case.display().to_string();
+            if jobs == 0 {
+                return Err(plain(miette!(
+                    help = "e.g. --jobs 2",
+                    "--jobs must be at least 1"
+                )));
+            }
+            let threads = threads
+                .unwrap_or_else(|| std::thread::available_parallelism().map_or(1, |n| n.get()));
+            let suffix = if ballistic_limit.is_some() {
+                "ballistic"
+            } else {
+                "sweep"
+            };
+            let opts = sweep::SweepOptions {
+                out_dir: out
+                    .unwrap_or_else(|| Path::new("runs").join(format!("{}_{suffix}", c.name))),
+                jobs,
+                threads: threads.max(1),
+                projectile,
+                overwrite,
+            };
+            let fail = |e: Error| plain(miette!("{e}"));
+            match (ballistic_limit, set.is_empty()) {
+                (Some(body), true) => {
+                    let Some(range) = speeds else {
+                        return Err(plain(miette!(
+                            help = "e.g. --speeds 300:1200 (m/s): the low speed must not perforate, the high one must",
+                            "--ballistic-limit needs --speeds LOW:HIGH"
+                        )));
+                    };
+                    let bracket = range
+                        .split_once(':')
+                        .and_then(|(a, b)| Some((a.trim().parse::<f64>().ok()?, b.trim().parse::<f64>().ok()?)))
+                        .ok_or_else(|| plain(miette!(help = "e.g. --speeds 300:1200", "--speeds {range}: expected LOW:HIGH in m/s")))?;
+                    let limit = sweep::ballistic(&text, &file, &body, bracket, tolerance, &opts).map_err(fail)?;
+                    say!(
+                        "ballistic limit of '{body}': between {:.1} m/s (held) and {:.1} m/s (perforated), after {} runs{}",
+                        limit.below,
+                        limit.above,
+                        limit.runs.len(),
+                        if limit.non_monotonic { "; a slower run perforated where a faster one held: see the table" } else { "" }
+                    );
+                }
+                (Some(_), false) => {
+                    return Err(plain(miette!(
+                        help = "run one command per value, each with --ballistic-limit",
+                        "--ballistic-limit and --set cannot be combined"
+                    )))
+                }
+                (None, true) => {
+                    return Err(plain(miette!(
+                        help = "e.g. --set body.sphere.velocity=5000:7000:3, or --ballistic-limit BODY --speeds LOW:HIGH",
+                        "nothing to sweep"
+                    )))
+                }
+                (None, false) => {
+                    let settings = set
+                        .iter()
+                        .map(String::as_str)
+                        .map(sweep::parse_setting)
+                        .collect::<Result<Vec<_>, _>>()
+                        .map_err(fail)?;
+                    let rows = sweep::sweep(&text, &file, &settings, &opts).map_err(fail)?;
+                    let perforated = rows.iter().filter(|r| r.1.perforated).count();
+                    say!("{} runs, {perforated} perforated", rows.len());
+                }
+            }
+            say!("output in {}", opts.out_dir.display());
             Ok(())
         }
         Command::Check { case } => {

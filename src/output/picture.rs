@@ -734,11 +734,24 @@ pub type HistoryPanel<'a> = (&'a str, Vec<Series<'a>>);
 /// values break the line. E.g. kinetic, internal, contact and total energy in one panel and the
 /// contact force in a second.
 pub fn plot_history(path: &Path, time: &[f64], panels: &[HistoryPanel<'_>]) -> Result<()> {
-    if time.is_empty() || panels.is_empty() {
+    let t_us: Vec<f64> = time.iter().map(|t| t * 1e6).collect();
+    plot_lines(path, "time (μs)", &t_us, panels, false)
+}
+
+/// Line plot of series against `x` (labelled `x_desc`), as [`plot_history`]; with `markers`
+/// each point is also drawn as a dot (a sweep's few runs).
+pub fn plot_lines(
+    path: &Path,
+    x_desc: &str,
+    x: &[f64],
+    panels: &[HistoryPanel<'_>],
+    markers: bool,
+) -> Result<()> {
+    if x.is_empty() || panels.is_empty() {
         return Err(Error::Invalid(format!(
-            "{}: nothing to plot ({} times, {} panels)",
+            "{}: nothing to plot ({} points, {} panels)",
             path.display(),
-            time.len(),
+            x.len(),
             panels.len()
         )));
     }
@@ -746,7 +759,7 @@ pub fn plot_history(path: &Path, time: &[f64], panels: &[HistoryPanel<'_>]) -> R
     check_writable(path)?;
     let err = draw_err(path);
 
-    let t_us: Vec<f64> = time.iter().map(|t| t * 1e6).collect();
+    let t_us = x;
     let finite_t = t_us.iter().copied().filter(|t| t.is_finite());
     let t0 = finite_t.clone().fold(f64::MAX, f64::min);
     let t1 = finite_t.fold(f64::MIN, f64::max);
@@ -755,7 +768,8 @@ pub fn plot_history(path: &Path, time: &[f64], panels: &[HistoryPanel<'_>]) -> R
     } else if t1 - t0 <= 0.0 {
         (t0 - 0.5, t1 + 0.5)
     } else {
-        (t0, t1)
+        let pad = if markers { 0.04 * (t1 - t0) } else { 0.0 };
+        (t0 - pad, t1 + pad)
     };
     let (_, tstep) = ticks(t0, t1, 10);
 
@@ -766,7 +780,7 @@ pub fn plot_history(path: &Path, time: &[f64], panels: &[HistoryPanel<'_>]) -> R
     for ((y_label, series), area) in panels.iter().zip(&areas) {
         let (mut lo, mut hi) = (f64::MAX, f64::MIN);
         for (_, values) in series {
-            for (&v, t) in values.iter().zip(&t_us) {
+            for (&v, t) in values.iter().zip(t_us) {
                 if v.is_finite() && t.is_finite() {
                     lo = lo.min(v);
                     hi = hi.max(v);
@@ -787,7 +801,7 @@ pub fn plot_history(path: &Path, time: &[f64], panels: &[HistoryPanel<'_>]) -> R
         // Legend in the corner where it hides the fewest points; if every corner hides some,
         // make room for it above the data.
         let plot_px = (HISTORY_W - 14 - 28 - 96, HISTORY_PANEL_H - 28 - 48);
-        let (mut corner, hidden, bh) = legend_corner(&t_us, series, (t0, t1), (lo, hi), plot_px);
+        let (mut corner, hidden, bh) = legend_corner(t_us, series, (t0, t1), (lo, hi), plot_px);
         if hidden > 0 {
             hi = lo + (hi - lo) / (1.0 - bh - 0.02);
             corner = SeriesLabelPosition::UpperRight;
@@ -805,7 +819,7 @@ pub fn plot_history(path: &Path, time: &[f64], panels: &[HistoryPanel<'_>]) -> R
             .configure_mesh()
             .x_labels(10)
             .y_labels(6)
-            .x_desc("time (μs)")
+            .x_desc(x_desc)
             .y_desc(*y_label)
             .x_label_formatter(&|v| fmt_tick(*v, tstep))
             .y_label_formatter(&|v| fmt_tick(*v, ystep))
@@ -832,6 +846,13 @@ pub fn plot_history(path: &Path, time: &[f64], panels: &[HistoryPanel<'_>]) -> R
                 }
             }
             let mut labelled = false;
+            if markers {
+                let dots = segments
+                    .iter()
+                    .flatten()
+                    .map(|&p| Circle::new(p, 4, color.filled()));
+                chart.draw_series(dots).map_err(&err)?;
+            }
             for seg in segments.into_iter().filter(|s| !s.is_empty()) {
                 let anno = chart
                     .draw_series(LineSeries::new(seg, style))
