@@ -885,8 +885,9 @@ fn conserve_chunk<const D: usize, K: Kernel, const ART: bool, const CN: bool>(
 }
 
 /// What a pair with a failed member does not pass on: T_ij ∇W with each side's stress term
-/// σ/ρ² (CN-SPH: (σ/ρ²) B) replaced by its tension and deviator, σ/ρ² + max(p, 0)/ρ² I — the
-/// pair force less this keeps only the compressive pressures. A failed particle carries no
+/// σ/ρ² (CN-SPH: (σ/ρ²) B) replaced by its tension and deviator, σ/ρ² + max(p, 0)/ρ² I, and
+/// the artificial stress's term — the pair force less this keeps only the compressive
+/// pressures. A failed particle carries no
 /// tension and no deviator (`material::damage`), so its own part is zero.
 fn tension_cut<const D: usize, K: Kernel, const CN: bool>(
     kernel: K,
@@ -911,10 +912,27 @@ fn tension_cut<const D: usize, K: Kernel, const CN: bool>(
         })
     };
     let (ti, tj) = (side(i, gi), side(j, gj));
+    // The artificial stress (R_i + R_j) f^n exists only against the clumping of particles
+    // held in tension: a pair that passes on no tension carries none of it either. (Kept, it
+    // pushed rubble off the intact particles beside it, which held their tension and failed in
+    // turn: a failed zone grew through the whole plate of `examples/ogive_plate.toml`.)
+    let art = (!pass.art.is_empty()).then(|| {
+        let hij = 0.5 * (gi.h + gj.h);
+        let dp = 0.5 * (gi.dp + gj.dp);
+        let f = kernel.w::<D>(r, hij) / kernel.w::<D>(dp, hij);
+        (
+            f.powi(artificial_stress::EXPONENT),
+            &pass.art[i],
+            &pass.art[j],
+        )
+    });
     std::array::from_fn(|a| {
         let mut t = 0.0;
         for b in 0..D {
             t += (ti[a][b] + tj[a][b]) * xij[b] * gf;
+            if let Some((fa, ri, rj)) = art {
+                t += (ri[(a, b)] + rj[(a, b)]) * fa * xij[b] * gf;
+            }
         }
         t
     })
