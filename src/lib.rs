@@ -30,5 +30,6 @@ pub mod setup;
 pub mod simulation;
 pub mod sweep;
 pub mod tensor;
+pub mod validate;
 
 pub use error::{Error, Result};

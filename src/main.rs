@@ -1,4 +1,4 @@
-//! The `strike` command line: run, check, sweep, bench, materials.
+//! The `strike` command line: run, check, sweep, validate, bench, materials.
 
 use clap::{Parser, Subcommand};
 use miette::{miette, LabeledSpan, NamedSource, Report};
@@ -98,6 +98,28 @@ enum Command {
         /// Replace an earlier sweep's files in the output directory.
         #[arg(long)]
         overwrite: bool,
+    },
+    /// Run the verification cases against their references and write a report (Markdown with
+    /// plots, and one self-contained HTML page); exit non-zero if any case fails.
+    Validate {
+        /// The README's resolutions (slower) instead of the coarse ones.
+        #[arg(long)]
+        fine: bool,
+        /// Only these cases (repeatable): elastic_wave, hel, spall, taylor.
+        #[arg(long = "case", value_name = "NAME")]
+        cases: Vec<String>,
+        /// Output directory (default: runs/validate).
+        #[arg(long)]
+        out: Option<PathBuf>,
+        /// Scale every tolerance by this factor (e.g. 0.5: what passes at half the tolerance).
+        #[arg(long, default_value_t = 1.0)]
+        tolerance_factor: f64,
+        /// Write the table into this README, between its `strike validate` markers.
+        #[arg(long)]
+        readme: Option<PathBuf>,
+        /// Worker threads (default: all cores).
+        #[arg(long)]
+        threads: Option<usize>,
     },
     /// Read and validate a deck without running it: particles, h, first time step, memory and
     /// run-time estimates, warnings.
@@ -331,6 +353,66 @@ fn main_inner() -> Result<(), (Report, bool)> {
             }
             say!("output in {}", opts.out_dir.display());
             Ok(())
+        }
+        Command::Validate {
+            fine,
+            cases,
+            out,
+            tolerance_factor,
+            readme,
+            threads,
+        } => {
+            use strike::validate;
+            set_threads(threads).map_err(plain)?;
+            if !(tolerance_factor > 0.0 && tolerance_factor.is_finite()) {
+                return Err(plain(miette!(
+                    help = "e.g. --tolerance-factor 0.5",
+                    "--tolerance-factor must be a positive number"
+                )));
+            }
+            let out_dir = out.unwrap_or_else(|| Path::new("runs").join("validate"));
+            let fail = |e: Error| plain(miette!("{e}"));
+            // A README without the markers is refused before anything runs.
+            let readme_text = match &readme {
+                Some(path) => {
+                    let text = std::fs::read_to_string(path)
+                        .map_err(|e| plain(miette!("cannot read {}: {e}", path.display())))?;
+                    validate::replace_readme_block(&text, "", "").map_err(fail)?;
+                    Some(text)
+                }
+                None => None,
+            };
+            let reports = validate::run(&cases, fine, &out_dir).map_err(fail)?;
+            validate::write_report(&reports, fine, tolerance_factor, &out_dir).map_err(fail)?;
+            let table = validate::table(&reports, tolerance_factor);
+            say!("{table}");
+            if let (Some(path), Some(text)) = (readme, readme_text) {
+                let note = format!(
+                    "Written by `strike validate{}` (strike {}); the full report with its plots is in `runs/validate/report.html`.",
+                    if fine { " --fine" } else { "" },
+                    env!("CARGO_PKG_VERSION")
+                );
+                let new = validate::replace_readme_block(&text, &table, &note).map_err(fail)?;
+                strike::output::atomic::write(&path, new.as_bytes())
+                    .map_err(|e| plain(miette!("cannot write {}: {e}", path.display())))?;
+                say!("table written into {}", path.display());
+            }
+            say!("report in {}", out_dir.join("report.html").display());
+            let failed: Vec<&str> = reports
+                .iter()
+                .filter(|r| !r.passes(tolerance_factor))
+                .map(|r| r.name)
+                .collect();
+            if failed.is_empty() {
+                Ok(())
+            } else {
+                Err(plain(miette!(
+                    "{} of {} cases failed: {}",
+                    failed.len(),
+                    reports.len(),
+                    failed.join(", ")
+                )))
+            }
         }
         Command::Check { case } => {
             let c = load(&case).map_err(plain)?;

@@ -32,103 +32,40 @@ fn run_to<const D: usize>(sim: &mut Simulation<D>, t: f64) -> Vec<Diagnostics> {
     out
 }
 
-/// Furthest x of a body's particles moving faster than `v` along x.
-fn front(sim: &Simulation<2>, body: u32, v: f64) -> f64 {
-    let p = &sim.particles;
-    (0..p.n_real)
-        .filter(|&i| p.body[i] == body && p.v[i][0] > v)
-        .map(|i| p.x[i][0])
-        .fold(f64::NEG_INFINITY, f64::max)
+/// Every check of a `strike validate` case within its tolerance, printed.
+fn validated(outcome: strike::Result<strike::validate::Outcome>) {
+    let outcome = outcome.expect("the case runs");
+    for c in &outcome.checks {
+        println!(
+            "{} ({}): {:.6e} against {:.6e} {}, {:+.3} % (tolerance {} %)",
+            c.quantity,
+            c.setting,
+            c.measured,
+            c.reference,
+            c.unit,
+            100.0 * c.error(),
+            100.0 * c.tolerance
+        );
+    }
+    for c in &outcome.checks {
+        assert!(c.passes(1.0), "{c:?}");
+    }
 }
 
-fn elastic_constants(case: &Case) -> (f64, f64, f64) {
-    let m = &case.materials[case.bodies[1].material];
-    (
-        m.density,
-        m.eos.bulk_modulus(m.density),
-        m.strength.shear_modulus(),
-    )
-}
-
-/// Elastic wave in uniaxial strain: the front (where v_x passes half the piston's speed) moves
-/// at c_L = √((K + 4G/3)/ρ), within 2 %; the stress behind it is −ρ c_L v. Both formulations.
+/// Elastic wave in uniaxial strain (`strike validate --case elastic_wave`): the front moves at
+/// c_L = √((K + 4G/3)/ρ) within 2 %; the stress behind it is −ρ c_L v within 2 %. Both
+/// formulations.
 #[test]
 fn elastic_wave_front_speed() {
-    for f in FORMULATIONS {
-        elastic_wave(f);
-    }
+    validated(strike::validate::elastic_wave(false));
 }
 
-fn elastic_wave(formulation: Formulation) {
-    let case = example_in("elastic_wave.toml", formulation);
-    let (rho, k, g) = elastic_constants(&case);
-    let c = ((k + 4.0 / 3.0 * g) / rho).sqrt();
-    let v = case.bodies[0].velocity[0];
-    let mut sim = Simulation::<2>::new(&case).unwrap();
-    run_to(&mut sim, 4e-6);
-    let (t1, x1) = (sim.state.time, front(&sim, 1, 0.5 * v));
-    run_to(&mut sim, 12e-6);
-    let (t2, x2) = (sim.state.time, front(&sim, 1, 0.5 * v));
-    let speed = (x2 - x1) / (t2 - t1);
-    let err = speed / c - 1.0;
-    println!(
-        "elastic wave ({formulation:?}): front {speed:.1} m/s, c_L {c:.1} m/s, error {:.3} %",
-        100.0 * err
-    );
-    assert!(err.abs() < 0.02, "front speed {speed} vs {c}");
-    // σ_xx behind the front, away from the piston.
-    let p = &sim.particles;
-    let behind: Vec<f64> = (0..p.n_real)
-        .filter(|&i| p.body[i] == 1 && p.x[i][0] > 0.02 && p.x[i][0] < 0.05)
-        .map(|i| p.s[i][(0, 0)] - p.p[i])
-        .collect();
-    let sxx = behind.iter().sum::<f64>() / behind.len() as f64;
-    let expect = -rho * c * v;
-    println!("elastic wave ({formulation:?}): σ_xx {sxx:.4e} Pa, −ρ c v {expect:.4e} Pa");
-    assert!((sxx / expect - 1.0).abs() < 0.02);
-}
-
-/// Uniaxial-strain loading of an elastic–perfectly plastic column: the elastic precursor
-/// carries σ_HEL = Y (1 − ν)/(1 − 2ν), within 5 %. Both formulations.
+/// Uniaxial-strain loading of an elastic–perfectly plastic column (`strike validate --case
+/// hel`): the elastic precursor carries σ_HEL = Y (1 − ν)/(1 − 2ν) within 5 %, and the material
+/// behind the plastic wave has yielded. Both formulations.
 #[test]
 fn hugoniot_elastic_limit() {
-    for f in FORMULATIONS {
-        hel(f);
-    }
-}
-
-fn hel(formulation: Formulation) {
-    let case = example_in("hugoniot_elastic_limit.toml", formulation);
-    let (_, k, g) = elastic_constants(&case);
-    let y = match case.materials[case.bodies[1].material].strength {
-        strike::case::StrengthSpec::VonMises { yield_stress, .. } => yield_stress,
-        _ => panic!("von Mises expected"),
-    };
-    let nu = (3.0 * k - 2.0 * g) / (2.0 * (3.0 * k + g));
-    let hel = y * (1.0 - nu) / (1.0 - 2.0 * nu);
-    let mut sim = Simulation::<2>::new(&case).unwrap();
-    run_to(&mut sim, case.simulation.end_time);
-    let p = &sim.particles;
-    // The precursor: the largest compression among column particles still elastic.
-    let precursor = (0..p.n_real)
-        .filter(|&i| p.body[i] == 1 && p.eps_p[i] == 0.0)
-        .map(|i| p.p[i] - p.s[i][(0, 0)])
-        .fold(0.0, f64::max);
-    // Behind the plastic wave the material has yielded.
-    let yielded = (0..p.n_real)
-        .filter(|&i| p.body[i] == 1 && p.x[i][0] < 10e-3)
-        .all(|i| p.eps_p[i] > 0.0);
-    println!(
-        "HEL ({formulation:?}): precursor {:.4} GPa, Y(1−ν)/(1−2ν) = {:.4} GPa (ν = {nu:.4}), error {:.2} %",
-        precursor / 1e9,
-        hel / 1e9,
-        100.0 * (precursor / hel - 1.0)
-    );
-    assert!(
-        yielded,
-        "material behind the plastic wave must have yielded"
-    );
-    assert!((precursor / hel - 1.0).abs() < 0.05);
+    validated(strike::validate::hel(false));
 }
 
 /// Energy in an elastic case with no external work: the piston of the elastic-wave deck set

@@ -2,6 +2,7 @@
 
 use strike::case::Case;
 use strike::simulation::Simulation;
+use strike::validate::{pull_back, spall_run};
 
 fn load(name: &str) -> Case {
     let path = format!("{}/examples/{name}.toml", env!("CARGO_MANIFEST_DIR"));
@@ -16,99 +17,6 @@ fn two_resolutions(name: &str) -> [Case; 2] {
         b.spacing *= 0.5;
     }
     [coarse, fine]
-}
-
-/// What a flyer-plate run shows: the free-face velocity history of the target (the mean of
-/// its last particle layer) and where the target failed.
-struct Spall {
-    /// (t, u_fs).
-    free_face: Vec<(f64, f64)>,
-    /// x of the target's failed particles at the end.
-    failed_x: Vec<f64>,
-    momentum_error: f64,
-}
-
-fn spall_run(case: &Case) -> Spall {
-    let mut sim = Simulation::<2>::new(case).unwrap();
-    let target: u32 = 1;
-    let dp = case.bodies[target as usize].spacing;
-    let end = case.simulation.end_time;
-    let mut free_face = Vec::new();
-    let mut momentum_error: f64 = 0.0;
-    let mut p0 = None;
-    while sim.state.time < end * (1.0 - 1e-12) {
-        let d = sim.step(end - sim.state.time).unwrap();
-        let p0 = *p0.get_or_insert(d.momentum);
-        let dev = (d.momentum[0] - p0[0]).abs();
-        momentum_error = momentum_error.max(dev / d.momentum_scale);
-        let p = &sim.particles;
-        let back = (0..p.n_real)
-            .filter(|&i| p.body[i] == target)
-            .map(|i| p.x[i][0])
-            .fold(f64::NEG_INFINITY, f64::max);
-        let (mut sum, mut n) = (0.0, 0.0);
-        for i in (0..p.n_real).filter(|&i| p.body[i] == target && p.x[i][0] > back - 0.5 * dp) {
-            sum += p.v[i][0];
-            n += 1.0;
-        }
-        free_face.push((sim.state.time, sum / n));
-        if std::env::var_os("STRIKE_DUMP").is_some() && free_face.len() % 10 == 0 {
-            let mut hist = std::collections::BTreeMap::<i64, usize>::new();
-            for i in (0..p.n_real).filter(|&i| p.damage[i] > 0.0) {
-                *hist.entry((p.x[i][0] / 1e-4).floor() as i64).or_default() += 1;
-            }
-            let (mut smax, mut xmax) = (f64::NEG_INFINITY, 0.0);
-            for i in (0..p.n_real).filter(|&i| p.body[i] == target) {
-                let sxx = -p.p[i] + p.s[i][(0, 0)];
-                if sxx > smax {
-                    smax = sxx;
-                    xmax = p.x[i][0];
-                }
-            }
-            eprintln!(
-                "ff {:.4e} {:.2} tension {:.3} GPa at {:.3} mm {:?}",
-                sim.state.time,
-                sum / n,
-                smax * 1e-9,
-                xmax * 1e3,
-                hist
-            );
-        }
-    }
-    let p = &sim.particles;
-    let failed_x = (0..p.n_real)
-        .filter(|&i| p.body[i] == target && p.damage[i] >= 1.0)
-        .map(|i| p.x[i][0])
-        .collect();
-    Spall {
-        free_face,
-        failed_x,
-        momentum_error,
-    }
-}
-
-/// (u_max, the pull-back minimum after it): the plateau is the running maximum until the
-/// velocity first falls 5 % below it; the minimum is the lowest velocity after that before
-/// the spall's recompression brings the free face back up by a tenth of the drop.
-fn pull_back(free_face: &[(f64, f64)]) -> (f64, f64) {
-    let mut u_max = f64::NEG_INFINITY;
-    let mut k = 0;
-    while k < free_face.len() {
-        let u = free_face[k].1;
-        if u < 0.95 * u_max {
-            break;
-        }
-        u_max = u_max.max(u);
-        k += 1;
-    }
-    let mut u_min = u_max;
-    for &(_, u) in &free_face[k.min(free_face.len())..] {
-        u_min = u_min.min(u);
-        if u > u_min + 0.1 * (u_max - u_min) {
-            break;
-        }
-    }
-    (u_max, u_min)
 }
 
 /// Issue 13, item 6 (spall): a flyer-plate impact spalls the target, and the free-face pull-back
@@ -132,7 +40,7 @@ fn flyer_plate_spall_gives_back_the_spall_strength() {
     let mut results = Vec::new();
     for case in two_resolutions("spall") {
         let dp = case.bodies[1].spacing;
-        let run = spall_run(&case);
+        let run = spall_run(&case).unwrap();
         let (u_max, u_min) = pull_back(&run.free_face);
         let sigma = 0.5 * rho0 * c0 * (u_max - u_min);
         let plane = run.failed_x.iter().sum::<f64>() / run.failed_x.len().max(1) as f64;
@@ -169,7 +77,7 @@ fn flyer_plate_spall_gives_back_the_spall_strength() {
     // Without damage the target holds the tension and the free face falls back to rest.
     let mut intact = load("spall");
     intact.materials[0].damage = Default::default();
-    let run = spall_run(&intact);
+    let run = spall_run(&intact).unwrap();
     let (u_max, u_min) = pull_back(&run.free_face);
     println!("no damage: u_fs {u_max:.1} → {u_min:.1} m/s");
     assert!(run.failed_x.is_empty());
@@ -179,33 +87,10 @@ fn flyer_plate_spall_gives_back_the_spall_strength() {
     );
 }
 
-/// What a Taylor-bar run gives at 80 µs: (final length, impact-face diameter, peak plastic
-/// strain) of the rod (body 0), lengths in m. The length runs over the rod's particles from the
-/// lowest to the highest plus one spacing (each particle stands for a cell Δp across). That
-/// holds for all three walls: a rod on the symmetry plane stays on it, its twin rebounds (by
-/// about 1 mm at 80 µs), so the length cannot be taken from the wall. It overstates the length
-/// by up to Δp/2, the lowest layer being flattened (its centres end about e^(−εp) Δp/2 from the
-/// wall). The face diameter is twice the largest radius among the particles within 0.6 Δp of
-/// the rod's lowest, plus one spacing.
+/// (final length, face diameter, peak εp) of a Taylor-bar run (`strike::validate::taylor_run`).
 fn taylor_run(case: &Case) -> (f64, f64, f64) {
-    let mut sim = Simulation::<3>::new(case).unwrap();
-    let end = case.simulation.end_time;
-    while sim.state.time < end * (1.0 - 1e-12) {
-        sim.step(end - sim.state.time).unwrap();
-    }
-    let dp = case.bodies[0].spacing;
-    let p = &sim.particles;
-    let rod: Vec<usize> = (0..p.n_real).filter(|&i| p.body[i] == 0).collect();
-    let z = |i: usize| p.x[i][2];
-    let lo = rod.iter().map(|&i| z(i)).fold(f64::INFINITY, f64::min);
-    let hi = rod.iter().map(|&i| z(i)).fold(f64::NEG_INFINITY, f64::max);
-    let r_face = rod
-        .iter()
-        .filter(|&&i| z(i) < lo + 0.6 * dp)
-        .map(|&i| p.x[i][0].hypot(p.x[i][1]))
-        .fold(0.0, f64::max);
-    let eps = rod.iter().map(|&i| p.eps_p[i]).fold(0.0, f64::max);
-    (hi - lo + dp, 2.0 * r_face + dp, eps)
+    let r = strike::validate::taylor_run(case).unwrap();
+    (r.length, r.face, r.eps)
 }
 
 /// The Taylor bar on a wall made three ways: a symmetry plane (the deck), the rod meeting its
