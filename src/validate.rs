@@ -127,6 +127,32 @@ fn formulation_label(f: Formulation) -> &'static str {
     }
 }
 
+/// A profile along x (m, shown in mm) of one formulation's run against a reference.
+fn profile_figure(
+    f: Formulation,
+    x: &[f64],
+    y_label: &str,
+    measured: Vec<f64>,
+    (reference, values): (&str, Vec<f64>),
+) -> Figure {
+    let tag = match f {
+        Formulation::Conventional => "conventional",
+        Formulation::Corrected => "cn",
+    };
+    Figure {
+        name: format!("profile_{tag}"),
+        x_label: "x (mm)".into(),
+        x: x.iter().map(|x| x * 1e3).collect(),
+        panels: vec![(
+            y_label.into(),
+            vec![
+                (format!("strike, {}", formulation_label(f)), measured),
+                (reference.into(), values),
+            ],
+        )],
+    }
+}
+
 /// (ρ, K, G) of body 1's material.
 fn elastic_constants(case: &Case) -> (f64, f64, f64) {
     let m = &case.materials[case.bodies[1].material];
@@ -224,28 +250,13 @@ pub fn elastic_wave(_fine: bool) -> Result<Outcome> {
             .iter()
             .map(|&x| if x < c * t2 { -rho * c * v } else { 0.0 })
             .collect();
-        figures.push(Figure {
-            name: format!(
-                "profile_{}",
-                if f == Formulation::Conventional {
-                    "conventional"
-                } else {
-                    "cn"
-                }
-            ),
-            x_label: "x (mm)".into(),
-            x: x.iter().map(|x| x * 1e3).collect(),
-            panels: vec![(
-                "σ_xx at 12 µs (MPa)".into(),
-                vec![
-                    (
-                        format!("strike, {}", formulation_label(f)),
-                        s.iter().map(|s| s * 1e-6).collect(),
-                    ),
-                    ("exact".into(), exact.iter().map(|s| s * 1e-6).collect()),
-                ],
-            )],
-        });
+        figures.push(profile_figure(
+            f,
+            &x,
+            "σ_xx at 12 µs (MPa)",
+            s.iter().map(|s| s * 1e-6).collect(),
+            ("exact", exact.iter().map(|s| s * 1e-6).collect()),
+        ));
     }
     Ok(Outcome { checks, figures })
 }
@@ -314,28 +325,13 @@ pub fn hel(_fine: bool) -> Result<Outcome> {
             .map(|i| p.x[i][0])
             .fold(0.0, f64::max);
         let (x, s) = profile(&sim, (0.0, hi, 2.0 * case.bodies[1].spacing), compression);
-        figures.push(Figure {
-            name: format!(
-                "profile_{}",
-                if f == Formulation::Conventional {
-                    "conventional"
-                } else {
-                    "cn"
-                }
-            ),
-            x_label: "x (mm)".into(),
-            x: x.iter().map(|x| x * 1e3).collect(),
-            panels: vec![(
-                "−σ_xx at the end (GPa)".into(),
-                vec![
-                    (
-                        format!("strike, {}", formulation_label(f)),
-                        s.iter().map(|s| s * 1e-9).collect(),
-                    ),
-                    ("σ_HEL".into(), vec![hel * 1e-9; x.len()]),
-                ],
-            )],
-        });
+        figures.push(profile_figure(
+            f,
+            &x,
+            "−σ_xx at the end (GPa)",
+            s.iter().map(|s| s * 1e-9).collect(),
+            ("σ_HEL", vec![hel * 1e-9; x.len()]),
+        ));
     }
     Ok(Outcome { checks, figures })
 }
