@@ -297,8 +297,10 @@ fn the_example_ogive_holds_its_analytic_volume() {
     let path = Path::new(env!("CARGO_MANIFEST_DIR")).join("examples/ogive_plate.toml");
     let text = std::fs::read_to_string(&path).unwrap();
     let dp = 1.0e-4;
-    let text = text.replace("spacing = 0.4e-3", &format!("spacing = {dp:e}"));
-    let case = strike::deck::parse(&text, path.to_str().unwrap()).unwrap();
+    let mut case = strike::deck::parse(&text, path.to_str().unwrap()).unwrap();
+    for b in &mut case.bodies {
+        b.spacing = dp;
+    }
     let (p, _) = strike::setup::build::<3>(&case).unwrap();
     let n = (0..p.n_real).filter(|&i| p.body[i] == 0).count();
     // Calibre 5 mm, CRH 3, 20 mm long (see examples/ogive_projectile.py), in m.
