@@ -12,8 +12,9 @@
 //! **Fast evaluation.** The triangles are sorted into a bounding-sphere tree; a cluster seen
 //! from more than [`FAR`] times its radius contributes its dipole term, N·(c − p) / |c − p|³
 //! with N = Σ A_t n_t its vector area and c its area-weighted centre (Barill et al. 2018, first
-//! order). That is exact for a planar cluster at infinity and within about 1e-3 of 1 for the
-//! lattice points of a body, far from the ½ that decides.
+//! order). Its error falls off slowly with the distance: inside a 2 208-triangle sphere w reads
+//! 1.025 at the centre with clusters taken from 2 radii, 1.013 from 3, 1.004 from 4 and
+//! 1.0002 from 6 (the unit test), so 6 it is — far from the ½ that decides either way.
 //!
 //! **Closed or not.** A surface with a hole larger than the lattice spacing leaves lattice
 //! points with |w| well between 0 and 1 near the hole; [`Mesh::ambiguous`] counts them, and the
@@ -23,7 +24,7 @@ use rayon::prelude::*;
 use std::path::Path;
 
 /// A cluster farther than this many of its radii contributes its dipole term.
-const FAR: f64 = 2.0;
+const FAR: f64 = 6.0;
 /// Largest number of triangles in a leaf of the tree.
 const LEAF: usize = 8;
 
@@ -450,7 +451,8 @@ pub(crate) mod tests {
         let m = Mesh::from_triangles("sphere", uv_sphere([0.1, 0.2, 0.3], 1.0, 24));
         assert_eq!(m.open_edges, 0);
         for p in [[0.1, 0.2, 0.3], [0.5, 0.2, 0.3], [0.1, 0.2, 1.15]] {
-            assert!((m.winding_number(p) - 1.0).abs() < 2e-3, "{p:?}");
+            let w = m.winding_number(p);
+            assert!((w - 1.0).abs() < 1e-3, "{p:?}: {w}");
         }
         for p in [[2.0, 0.0, 0.0], [0.1, 0.2, 1.4], [10.0, 10.0, 10.0]] {
             assert!(m.winding_number(p).abs() < 2e-3, "{p:?}");
