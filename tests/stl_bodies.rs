@@ -289,20 +289,14 @@ fn missing_damaged_and_misplaced_files_are_deck_errors() {
     assert!(text.contains("3D shape"), "{text}");
 }
 
-/// The example's ogive projectile (examples/ogive_projectile.stl) filled at Δp = 0.1 mm holds
-/// the volume of the tangent ogive it was written from, π ∫ r(z)² dz, within 1 % (the quarter
-/// model's count × 4).
+/// The example's ogive projectile (examples/ogive_projectile.stl) holds the volume of the
+/// tangent ogive it was written from, π ∫ r(z)² dz (the quarter model's count × 4): within 1 %
+/// filled at Δp = 0.1 mm, and closer than at 0.2 mm (the lattice's staircase at the nose
+/// shrinks with the spacing).
 #[test]
 fn the_example_ogive_holds_its_analytic_volume() {
     let path = Path::new(env!("CARGO_MANIFEST_DIR")).join("examples/ogive_plate.toml");
     let text = std::fs::read_to_string(&path).unwrap();
-    let dp = 1.0e-4;
-    let mut case = strike::deck::parse(&text, path.to_str().unwrap()).unwrap();
-    for b in &mut case.bodies {
-        b.spacing = dp;
-    }
-    let (p, _) = strike::setup::build::<3>(&case).unwrap();
-    let n = (0..p.n_real).filter(|&i| p.body[i] == 0).count();
     // Calibre 5 mm, CRH 3, 20 mm long (see examples/ogive_projectile.py), in m.
     let (r0, rho, length): (f64, f64, f64) = (2.5e-3, 15.0e-3, 20.0e-3);
     let nose = (rho * rho - (rho - r0) * (rho - r0)).sqrt();
@@ -318,7 +312,23 @@ fn the_example_ogive_holds_its_analytic_volume() {
     let v: f64 = (0..steps)
         .map(|k| PI * radius((k as f64 + 0.5) * dz).powi(2) * dz)
         .sum();
-    check_volume("ogive projectile", 4 * n, dp, v);
+    let mut errors = Vec::new();
+    for dp in [2.0e-4, 1.0e-4] {
+        let mut case = strike::deck::parse(&text, path.to_str().unwrap()).unwrap();
+        for b in &mut case.bodies {
+            b.spacing = dp;
+        }
+        let (p, _) = strike::setup::build::<3>(&case).unwrap();
+        let n = (0..p.n_real).filter(|&i| p.body[i] == 0).count();
+        let err = (4 * n) as f64 * dp.powi(3) / v - 1.0;
+        println!(
+            "ogive projectile, Δp = {dp:e} m: {n} particles, count·Δp³/V − 1 = {:+.3} %",
+            100.0 * err
+        );
+        errors.push(err);
+    }
+    assert!(errors[1].abs() < 0.01, "{errors:?}");
+    assert!(errors[1].abs() < errors[0].abs(), "{errors:?}");
 }
 
 /// A changed surface file changes the case's physical fingerprint (a checkpoint taken with the
