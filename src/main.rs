@@ -105,7 +105,9 @@ enum Command {
         /// The README's resolutions (slower) instead of the coarse ones.
         #[arg(long)]
         fine: bool,
-        /// Only these cases (repeatable): elastic_wave, hel, spall, taylor.
+        /// Only these cases (repeatable): elastic_wave, hel, energy, planar_impact, bars,
+        /// slow_bars, striker, sliding, incline, rubber_rings, hertz, planar_7kms, sphere_plate,
+        /// spall, taylor.
         #[arg(long = "case", value_name = "NAME")]
         cases: Vec<String>,
         /// Output directory (default: runs/validate).
@@ -384,14 +386,15 @@ fn main_inner() -> Result<(), (Report, bool)> {
             };
             let reports = validate::run(&cases, fine, &out_dir).map_err(fail)?;
             validate::write_report(&reports, fine, tolerance_factor, &out_dir).map_err(fail)?;
-            let table = validate::table(&reports, tolerance_factor);
-            say!("{table}");
+            say!("{}", validate::table(&reports, tolerance_factor));
             if let (Some(path), Some(text)) = (readme, readme_text) {
                 let note = format!(
-                    "Written by `strike validate{}` (strike {}); the full report with its plots is in `runs/validate/report.html`.",
+                    "Written by `strike validate{}` (strike {}); the full report, each setting's figure on its own row with its source and the plots, is in `{}`.",
                     if fine { " --fine" } else { "" },
-                    env!("CARGO_PKG_VERSION")
+                    env!("CARGO_PKG_VERSION"),
+                    out_dir.join("report.html").display()
                 );
+                let table = validate::summary(&reports, tolerance_factor);
                 let new = validate::replace_readme_block(&text, &table, &note).map_err(fail)?;
                 strike::output::atomic::write(&path, new.as_bytes())
                     .map_err(|e| plain(miette!("cannot write {}: {e}", path.display())))?;

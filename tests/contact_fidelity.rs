@@ -17,6 +17,9 @@ use strike::case::{
 use strike::contact::colour;
 use strike::simulation::{Diagnostics, Simulation};
 
+mod support;
+use support::validated;
+
 fn load(name: &str) -> Case {
     let path = format!("{}/examples/{name}.toml", env!("CARGO_MANIFEST_DIR"));
     strike::deck::load(std::path::Path::new(&path)).unwrap_or_else(|e| panic!("{path}: {e:?}"))
@@ -35,18 +38,6 @@ fn label(f: Formulation) -> &'static str {
     match f {
         Formulation::Conventional => "conventional",
         Formulation::Corrected => "CN-SPH",
-    }
-}
-
-/// Each formulation at the deck's resolution and at half its spacing.
-fn runs() -> impl Iterator<Item = (Formulation, f64)> {
-    FORMULATIONS.into_iter().flat_map(|f| [(f, 1.0), (f, 0.5)])
-}
-
-/// Every body spacing times `factor`.
-fn refine(case: &mut Case, factor: f64) {
-    for b in &mut case.bodies {
-        b.spacing *= factor;
     }
 }
 
@@ -105,18 +96,6 @@ fn max_penetration(rows: &[Diagnostics]) -> (f64, u64) {
     rows.iter()
         .flat_map(|d| d.mixing.iter())
         .fold((0.0, 0), |(p, m), x| (p.max(x.penetration), m.max(x.mixed)))
-}
-
-fn energy_dev(rows: &[Diagnostics]) -> f64 {
-    let e0 = rows[0].total;
-    let scale = rows
-        .iter()
-        .map(|d| d.kinetic + d.internal.abs() + d.contact)
-        .fold(0.0, f64::max);
-    rows.iter()
-        .map(|d| (d.total - e0).abs())
-        .fold(0.0, f64::max)
-        / scale
 }
 
 // ---------------------------------------------------------------------------------------------
@@ -275,288 +254,38 @@ fn mixing_flags_the_interdigitation_of_the_paper_form() {
 // ---------------------------------------------------------------------------------------------
 // No interdigitation at 7 km/s
 
-/// Figures of the 7 km/s planar impact.
-#[derive(Debug)]
-struct Planar {
-    penetration: f64,
-    mixed: u64,
-    /// Largest spread (Δp) of the flyer's foremost and the target's rearmost particles across
-    /// the lattice rows, over the run.
-    roughness: f64,
-    peak_pressure: f64,
-    /// Plateau figures at the end: particle velocity, shock speed, pressure, ρ/ρ0 of the target.
-    up: f64,
-    us: f64,
-    p: f64,
-    compression: f64,
-    energy: f64,
-    closest: f64,
-}
-
-fn planar(case: &Case) -> Planar {
-    let dp = case.bodies[0].spacing;
-    let width = 0.4e-3;
-    let rows_n = (width / dp).round() as usize;
-    let mut roughness: f64 = 0.0;
-    let mut fronts = Vec::new();
-    let sample = [0.9e-6, 1.4e-6];
-    let (sim, rows) = run::<2>(case, case.simulation.end_time, |sim, _| {
-        let p = &sim.particles;
-        let mut front = vec![f64::NEG_INFINITY; rows_n];
-        let mut rear = vec![f64::INFINITY; rows_n];
-        for i in 0..p.n_real {
-            let row = ((p.x[i][1] / dp) as usize).min(rows_n - 1);
-            if p.body[i] == 0 {
-                front[row] = front[row].max(p.x[i][0]);
-            } else {
-                rear[row] = rear[row].min(p.x[i][0]);
-            }
-        }
-        let spread = |v: &[f64]| {
-            v.iter().copied().fold(f64::NEG_INFINITY, f64::max)
-                - v.iter().copied().fold(f64::INFINITY, f64::min)
-        };
-        roughness = roughness.max(spread(&front).max(spread(&rear)) / dp);
-        if fronts.len() < sample.len() && sim.state.time >= sample[fronts.len()] {
-            // Shock front: the farthest target particle moving faster than 1 km/s.
-            let x = (0..p.n_real)
-                .filter(|&i| p.body[i] == 1 && p.v[i][0] > 1000.0)
-                .map(|i| p.x[i][0])
-                .fold(f64::NEG_INFINITY, f64::max);
-            fronts.push((sim.state.time, x));
-        }
-    });
-    let (penetration, mixed) = max_penetration(&rows);
-    let p = &sim.particles;
-    let front = fronts[1].1;
-    // Plateau: target particles from 1 mm behind the interface to 1 mm behind the front.
-    let interface = (0..p.n_real)
-        .filter(|&i| p.body[i] == 1)
-        .map(|i| p.x[i][0])
-        .fold(f64::INFINITY, f64::min);
-    let plateau: Vec<usize> = (0..p.n_real)
-        .filter(|&i| p.body[i] == 1 && p.x[i][0] > interface + 1.0e-3 && p.x[i][0] < front - 1.0e-3)
-        .collect();
-    let mean = |f: &dyn Fn(usize) -> f64| {
-        plateau.iter().map(|&i| f(i)).sum::<f64>() / plateau.len() as f64
-    };
-    Planar {
-        penetration,
-        mixed,
-        roughness,
-        peak_pressure: rows.iter().map(|d| d.max_pressure).fold(0.0, f64::max),
-        up: mean(&|i| p.v[i][0]),
-        us: (fronts[1].1 - fronts[0].1) / (fronts[1].0 - fronts[0].0),
-        p: mean(&|i| p.p[i]),
-        compression: mean(&|i| p.rho[i]) / 2785.0,
-        energy: energy_dev(&rows),
-        closest: rows
-            .iter()
-            .filter_map(|d| d.min_interbody_distance)
-            .fold(f64::INFINITY, f64::min),
-    }
-}
-
-/// 7 km/s Al on Al through the colour contact at Δp = 0.1 and 0.05 mm to 1.5 µs: no particle
-/// past the other body's surface, the interface flat within one spacing, the peak pressure
-/// within 25 % of the Hugoniot's, the Rankine–Hugoniot state on the plateau within 5 %, and
-/// the bodies' particles never closer than 0.5 Δp (VALIDATION.md §D).
+/// 7 km/s Al on Al through the colour contact at Δp = 0.1 and 0.05 mm to 1.5 µs (`strike
+/// validate --case planar_7kms`): no particle past the other body's surface, the interface flat
+/// within one spacing, the peak pressure within 25 % of the Hugoniot's, the Rankine–Hugoniot
+/// state on the plateau within 5 %, and the bodies' particles never closer than 0.5 Δp
+/// (VALIDATION.md §D). Undamped, the first layers met at 0.44 Δp and rang back apart (see
+/// `colour::damping`).
 #[test]
 fn no_interdigitation_at_7_km_s() {
-    let (rho0, c0, s1, v) = (2785.0, 5328.0, 1.338, 7000.0);
-    let up = v / 2.0;
-    let us = c0 + s1 * up;
-    let p = rho0 * us * up;
-    let compression = us / (us - up);
-    for (formulation, factor) in runs() {
-        let mut case = load("planar_7kms_contact");
-        refine(&mut case, factor);
-        case.simulation.formulation = formulation;
-        let f = planar(&case);
-        println!(
-            "7 km/s contact, {}, Δp = {:.2} mm: {f:?}; Hugoniot u_p {up} m/s, U_s {us:.0} m/s, p {:.1} GPa, ρ/ρ0 {compression:.3}",
-            label(formulation),
-            case.bodies[0].spacing * 1e3,
-            p / 1e9
-        );
-        assert_eq!((f.penetration, f.mixed), (0.0, 0), "{f:?}");
-        assert!(f.roughness < 1.0, "interface roughness {}", f.roughness);
-        assert!(
-            f.peak_pressure < 1.25 * p,
-            "peak {:.1} GPa",
-            f.peak_pressure / 1e9
-        );
-        for (got, want, what) in [
-            (f.up, up, "u_p"),
-            (f.us, us, "U_s"),
-            (f.p, p, "pressure"),
-            (f.compression, compression, "ρ/ρ0"),
-        ] {
-            assert!((got / want - 1.0).abs() < 0.05, "{what}: {got} vs {want}");
-        }
-        assert!(f.energy < 0.01, "energy {}", f.energy);
-        // Undamped, the first layers met at 0.44 Δp and rang back apart (see colour::damping).
-        assert!(f.closest > 0.5, "closest approach {:.3} Δp", f.closest);
-    }
+    validated(strike::validate::contact::planar_7kms(true));
 }
 
 // ---------------------------------------------------------------------------------------------
 // Hertz
 
-/// Two equal elastic spheres at ±50 m/s (examples/hertz_spheres.toml): peak force and contact
-/// duration within 10 % of Hertz's at R/Δp = 20 and 30, the error not growing with refinement,
-/// no mixing, restitution above 0.95, energy within 1 %, in both formulations.
-///
-/// Energy: in conventional SPH the total (contact potential Φ included) stays within 1 %
-/// throughout. CN-SPH's contact acts along the contact normal only, so it exchanges with the
-/// motion only the normal part of Φ's gradient: during the contact the total counts the rest of
-/// Φ too (+2.0 % at the deepest compression at R/Δp = 20), and once the spheres part (Φ = 0)
-/// the drift is the force's own work; that drift is what is held to 1 % there.
+/// Two equal elastic spheres at ±50 m/s (`strike validate --case hertz`): peak force and
+/// contact duration within 10 % of Hertz's at R/Δp = 20 and 30, the error not growing with
+/// refinement, no mixing, restitution above 0.95, energy within 1 %, in both formulations.
 #[test]
 fn hertz_spheres_converge() {
-    let (e, nu, rho, r, v): (f64, f64, f64, f64, f64) = (68.9e9, 0.33, 2700.0, 0.01, 100.0);
-    let es = e / (2.0 * (1.0 - nu * nu));
-    let rs = r / 2.0;
-    let ms = rho * 4.0 / 3.0 * std::f64::consts::PI * r.powi(3) / 2.0;
-    let dmax = (15.0 * ms * v * v / (16.0 * es * rs.sqrt())).powf(0.4);
-    let f_hertz = 4.0 / 3.0 * es * rs.sqrt() * dmax.powf(1.5);
-    let t_hertz = 2.868 * (ms * ms / (rs * es * es * v)).powf(0.2);
-    for formulation in FORMULATIONS {
-        let mut errors = Vec::new();
-        for per_radius in [20.0, 30.0] {
-            let mut case = load("hertz_spheres");
-            refine(&mut case, 20.0 / per_radius);
-            case.simulation.formulation = formulation;
-            let (sim, rows) = run::<3>(&case, case.simulation.end_time, |_, _| {});
-            // The quarter model carries a quarter of the force.
-            let force: Vec<(f64, f64)> = rows
-                .iter()
-                .map(|d| (d.time, 4.0 * d.body_contact_force[1][2]))
-                .collect();
-            let f_max = force.iter().map(|f| f.1).fold(0.0, f64::max);
-            let on: Vec<f64> = force.iter().filter(|f| f.1 != 0.0).map(|f| f.0).collect();
-            let t_c = on[on.len() - 1] - on[0];
-            let tensile = force.iter().map(|f| f.1).fold(0.0, f64::min);
-            let released = force[force.len() - 1].1 == 0.0;
-            let v_after = body_velocity(&sim);
-            let restitution = (v_after[1][2] - v_after[0][2]) / v;
-            let (pen, mixed) = max_penetration(&rows);
-            let excursion = energy_dev(&rows);
-            let drift = energy_dev(&[rows[0].clone(), rows[rows.len() - 1].clone()]);
-            let (ef, et) = (f_max / f_hertz - 1.0, t_c / t_hertz - 1.0);
-            println!(
-                "Hertz, {}, R/Δp = {per_radius}: F_max {f_max:.0} N ({:+.1} % of {f_hertz:.0}), t_c {:.2} µs ({:+.1} % of {:.2}), restitution {restitution:.4}, energy within {excursion:.2e} during the contact, {drift:.2e} after, penetration {pen}",
-                label(formulation),
-                100.0 * ef,
-                t_c * 1e6,
-                100.0 * et,
-                t_hertz * 1e6
-            );
-            assert!(ef.abs() < 0.10 && et.abs() < 0.10, "{ef} {et}");
-            assert!(
-                released && tensile >= 0.0,
-                "force after: released {released}, most tensile {tensile}"
-            );
-            assert!(restitution > 0.95, "{restitution}");
-            assert_eq!((pen, mixed), (0.0, 0));
-            let energy = match formulation {
-                Formulation::Conventional => excursion,
-                Formulation::Corrected => drift,
-            };
-            assert!(energy < 0.01, "energy {energy}");
-            errors.push(ef.abs().max(et.abs()));
-        }
-        assert!(
-            errors[1] <= errors[0],
-            "{}: the error grew with refinement: {errors:?}",
-            label(formulation)
-        );
-    }
+    validated(strike::validate::contact::hertz(true));
 }
 
 // ---------------------------------------------------------------------------------------------
 // Separation at low speed
 
-/// The contact pulse on body 0: its duration at half its plateau (the ideal pulse is a
-/// rectangle, so this is its length; the plateau is the median force over the steps in contact,
-/// not the peak, which the first instants of the impact raise to about 1.6 times the plateau in
-/// both formulations and which would move the threshold up the pulse's ramps), whether the
-/// force is exactly zero at the end, and the most tensile x force on body 0 (> 0 would pull it
-/// toward body 1).
-fn contact_span(rows: &[Diagnostics]) -> (f64, bool, f64) {
-    let mut forces: Vec<f64> = rows
-        .iter()
-        .map(|d| d.body_contact_force[0][0].abs())
-        .filter(|&f| f > 0.0)
-        .collect();
-    forces.sort_by(f64::total_cmp);
-    let plateau = forces[forces.len() / 2];
-    let on: Vec<f64> = rows
-        .iter()
-        .filter(|d| d.body_contact_force[0][0].abs() > 0.5 * plateau)
-        .map(|d| d.time)
-        .collect();
-    let tensile = rows
-        .iter()
-        .map(|d| d.body_contact_force[0][0])
-        .fold(f64::NEG_INFINITY, f64::max);
-    let released = rows[rows.len() - 1].body_contact_force[0][0] == 0.0;
-    (on[on.len() - 1] - on[0], released, tensile)
-}
-
-fn bar_speed() -> f64 {
-    let (e, nu, rho): (f64, f64, f64) = (68.9e9, 0.33, 2700.0);
-    let k = e / (3.0 * (1.0 - 2.0 * nu));
-    let g = e / (2.0 * (1.0 + nu));
-    ((k + 4.0 * g / 3.0) / rho).sqrt()
-}
-
-/// Bars at ±10 m/s with L/Δp = 100 and 200 (examples/bars_contact.toml) part at ∓10 m/s within
-/// 5 % (CN-SPH: at L/Δp = 200, see below); the contact pulse lasts 2L/c within 5 % (at half its plateau), is never tensile and
-/// exactly zero once they part.
-/// The paper's form, side by side, lets them part 25 % too fast.
+/// Bars at ±10 m/s with L/Δp = 100 and 200 (`strike validate --case slow_bars`) part at
+/// ∓10 m/s within 5 % (CN-SPH: from L/Δp = 200, improving with refinement); the contact pulse
+/// lasts 2L/c within 5 % (at half its plateau), is never tensile and exactly zero once they
+/// part. The paper's form, side by side, lets them part 25 % too fast.
 #[test]
 fn slow_bars_part_at_their_speed() {
-    let two_l_c = 2.0 * 0.05 / bar_speed();
-    let mut previous = f64::INFINITY;
-    for (formulation, factor) in runs() {
-        let mut case = load("bars_contact");
-        case.simulation.end_time = 40.0e-6;
-        refine(&mut case, factor);
-        case.simulation.formulation = formulation;
-        let (sim, rows) = run::<2>(&case, case.simulation.end_time, |_, _| {});
-        let v = body_velocity(&sim);
-        let (span, released, tensile) = contact_span(&rows);
-        println!(
-            "bars ±10 m/s, {}, L/Δp = {:.0}: part at {:.3} / {:.3} m/s, contact {:.2} µs (2L/c {:.2}), energy {:.1e}",
-            label(formulation),
-            0.05 / case.bodies[0].spacing,
-            v[0][0],
-            v[1][0],
-            span * 1e6,
-            two_l_c * 1e6,
-            energy_dev(&rows)
-        );
-        // CN-SPH's bars part at ∓9.47 m/s at L/Δp = 100 (5.3 % short) and ∓9.64 m/s at 200:
-        // its speed is held to 5 % from L/Δp = 200, and to improve with refinement.
-        let error = (v[1][0] / 10.0 - 1.0).abs();
-        if formulation == Formulation::Conventional || factor < 1.0 {
-            assert!(
-                error < 0.05 && (v[0][0] / -10.0 - 1.0).abs() < 0.05,
-                "{v:?}"
-            );
-        }
-        if factor < 1.0 {
-            assert!(error < previous, "{error} after {previous}");
-        }
-        previous = error;
-        assert!((span / two_l_c - 1.0).abs() < 0.05, "{span}");
-        assert!(
-            released && tensile <= 0.0,
-            "released {released}, tensile {tensile}"
-        );
-        assert!(energy_dev(&rows) < 0.01);
-    }
+    validated(strike::validate::contact::slow_bars(true));
     let mut paper = load("bars_contact");
     paper.simulation.end_time = 40.0e-6;
     paper_law(&mut paper);
@@ -573,34 +302,12 @@ fn slow_bars_part_at_their_speed() {
     );
 }
 
-/// A striker half the bar's length (examples/striker.toml) ends at rest within 2 % of its
-/// impact speed at Δp = 0.5 and 0.25 mm; the contact lasts 2 L1/c; the bar carries the
+/// A striker half the bar's length (`strike validate --case striker`) ends at rest within 2 %
+/// of its impact speed at Δp = 0.5 and 0.25 mm; the contact lasts 2 L1/c; the bar carries the
 /// momentum. The paper's form pushes the striker back.
 #[test]
 fn striker_stops_dead() {
-    let two_l_c = 2.0 * 0.025 / bar_speed();
-    for (formulation, factor) in runs() {
-        let mut case = load("striker");
-        refine(&mut case, factor);
-        case.simulation.formulation = formulation;
-        let (sim, rows) = run::<2>(&case, case.simulation.end_time, |_, _| {});
-        let v = body_velocity(&sim);
-        let (span, released, tensile) = contact_span(&rows);
-        println!(
-            "striker, {}, Δp = {:.3} mm: striker ends at {:.3} m/s ({:+.2} % of 10), bar at {:.3} m/s, contact {:.2} µs (2 L1/c {:.2})",
-            label(formulation),
-            case.bodies[0].spacing * 1e3,
-            v[0][0],
-            10.0 * v[0][0],
-            v[1][0],
-            span * 1e6,
-            two_l_c * 1e6
-        );
-        assert!(v[0][0].abs() < 0.2, "striker at {} m/s", v[0][0]);
-        assert!((v[1][0] / 5.0 - 1.0).abs() < 0.02, "bar at {} m/s", v[1][0]);
-        assert!((span / two_l_c - 1.0).abs() < 0.05, "{span}");
-        assert!(released && tensile <= 0.0);
-    }
+    validated(strike::validate::contact::striker(true));
     let mut paper = load("striker");
     paper_law(&mut paper);
     let (sim, _) = run::<2>(&paper, paper.simulation.end_time, |_, _| {});

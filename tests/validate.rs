@@ -82,14 +82,16 @@ fn unknown_cases_and_readmes_without_markers_are_named() {
     let o = strike(&[
         "validate",
         "--case",
-        "hertz",
+        "hertz_sphere",
         "--out",
         out.to_str().unwrap(),
     ]);
     assert!(!o.status.success());
     let err = String::from_utf8_lossy(&o.stderr).replace(['│', '\n'], " ");
     assert!(
-        err.contains("no verification case `hertz`") && err.contains("elastic_wave"),
+        err.contains("no verification case `hertz_sphere`")
+            && err.contains("elastic_wave")
+            && err.contains("hertz"),
         "{err}"
     );
     let readme = out.join("README.md");
@@ -105,4 +107,9 @@ fn unknown_cases_and_readmes_without_markers_are_named() {
     ]);
     assert!(!o.status.success());
     assert!(String::from_utf8_lossy(&o.stderr).contains("block to write the table into"));
+    // The help names every case.
+    let help = String::from_utf8_lossy(&strike(&["validate", "--help"]).stdout).to_string();
+    for c in strike::validate::cases() {
+        assert!(help.contains(c.name), "`{}` missing from the help", c.name);
+    }
 }

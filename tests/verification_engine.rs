@@ -2,19 +2,13 @@
 //! decks, run in-process.
 
 use std::path::Path;
-use strike::case::{Case, Formulation, Motion};
+use strike::case::Case;
 use strike::deck;
 use strike::simulation::{Diagnostics, Simulation};
 use strike::Error;
 
-/// Both formulations: conventional SPH and CN-SPH.
-const FORMULATIONS: [Formulation; 2] = [Formulation::Conventional, Formulation::Corrected];
-
-fn example_in(name: &str, formulation: Formulation) -> Case {
-    let mut case = example(name);
-    case.simulation.formulation = formulation;
-    case
-}
+mod support;
+use support::validated;
 
 fn example(name: &str) -> Case {
     let path = Path::new(env!("CARGO_MANIFEST_DIR"))
@@ -30,26 +24,6 @@ fn run_to<const D: usize>(sim: &mut Simulation<D>, t: f64) -> Vec<Diagnostics> {
         out.push(sim.step(t - sim.state.time).expect("stable run"));
     }
     out
-}
-
-/// Every check of a `strike validate` case within its tolerance, printed.
-fn validated(outcome: strike::Result<strike::validate::Outcome>) {
-    let outcome = outcome.expect("the case runs");
-    for c in &outcome.checks {
-        println!(
-            "{} ({}): {:.6e} against {:.6e} {}, {:+.3} % (tolerance {} %)",
-            c.quantity,
-            c.setting,
-            c.measured,
-            c.reference,
-            c.unit,
-            100.0 * c.error(),
-            100.0 * c.tolerance
-        );
-    }
-    for c in &outcome.checks {
-        assert!(c.passes(1.0), "{c:?}");
-    }
 }
 
 /// Elastic wave in uniaxial strain (`strike validate --case elastic_wave`): the front moves at
@@ -68,42 +42,13 @@ fn hugoniot_elastic_limit() {
     validated(strike::validate::hel(false));
 }
 
-/// Energy in an elastic case with no external work: the piston of the elastic-wave deck set
-/// free as a flyer welded to the column. Kinetic + internal energy drifts < 1 %, and momentum
-/// is conserved to round-off. Both formulations.
+/// Energy in an elastic case with no external work (`strike validate --case energy`): the
+/// piston of the elastic-wave deck set free as a flyer welded to the column. Kinetic + internal
+/// energy drifts < 1 %, momentum is conserved to round-off, and most of the flyer's energy went
+/// into the column. Both formulations.
 #[test]
 fn elastic_energy_is_conserved() {
-    for f in FORMULATIONS {
-        elastic_energy(f);
-    }
-}
-
-fn elastic_energy(formulation: Formulation) {
-    let mut case = example_in("elastic_wave.toml", formulation);
-    case.bodies[0].motion = Motion::Free;
-    let mut sim = Simulation::<2>::new(&case).unwrap();
-    let hist = run_to(&mut sim, 12e-6);
-    let e0 = hist[0].total;
-    let drift = hist
-        .iter()
-        .map(|d| (d.total - e0).abs())
-        .fold(0.0, f64::max)
-        / e0;
-    let p0 = hist[0].momentum[0];
-    let dp = hist
-        .iter()
-        .map(|d| (d.momentum[0] - p0).abs())
-        .fold(0.0, f64::max)
-        / hist[0].momentum_scale;
-    println!(
-        "elastic energy ({formulation:?}): drift {:.3e} over {} steps, x momentum {dp:.1e}",
-        drift,
-        hist.len()
-    );
-    assert!(dp < 1e-10, "momentum drift {dp}");
-    assert!(drift < 0.01, "energy drift {drift}");
-    // The energy really moved: most of the flyer's kinetic energy went into the column.
-    assert!(hist.last().unwrap().internal > 0.2 * e0);
+    validated(strike::validate::energy(false));
 }
 
 /// A run that goes unstable stops with the particle, its body, its place and the cause, and

@@ -54,3 +54,35 @@ pub fn provision(venv: &Path) -> Result<PathBuf, String> {
     drop(lock);
     Ok(python)
 }
+
+/// Every check of a `strike validate` case within its tolerance, each printed first (run with
+/// `--nocapture` for the figures); returns the checks.
+pub fn validated(
+    outcome: strike::Result<strike::validate::Outcome>,
+) -> Vec<strike::validate::Check> {
+    let outcome = outcome.unwrap_or_else(|e| panic!("the case does not run: {e}"));
+    for c in &outcome.checks {
+        println!(
+            "{} ({}): {:.6e} {} against {:.6e}, {:?}{}",
+            c.quantity,
+            c.setting,
+            c.measured,
+            c.unit,
+            c.reference,
+            c.bound,
+            if c.bound == strike::validate::Bound::Relative {
+                format!(
+                    " {:+.3} % (tolerance {} %)",
+                    100.0 * c.error(),
+                    100.0 * c.tolerance
+                )
+            } else {
+                String::new()
+            }
+        );
+    }
+    for c in &outcome.checks {
+        assert!(c.passes(1.0), "{c:?}");
+    }
+    outcome.checks
+}
