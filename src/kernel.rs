@@ -174,42 +174,45 @@ impl Kernel for WendlandC2 {
     }
 }
 
-#[cfg(test)]
-mod tests {
-    use super::*;
-
-    /// ∫W dV and ∫∇W dV by a midpoint sum on a lattice much finer than h.
-    fn moments<const D: usize, K: Kernel>(k: K, h: f64, offset: f64) -> (f64, [f64; 3]) {
-        let n = 160i64; // lattice points per 2h
-        let dx = 4.0 * h / n as f64;
-        let mut integral = 0.0;
-        let mut grad = [0.0; 3];
-        let range = -(n / 2)..(n / 2);
-        let mut visit = |p: [f64; 3]| {
-            let r = (p[0] * p[0] + p[1] * p[1] + p[2] * p[2]).sqrt();
-            let dv = dx.powi(D as i32);
-            integral += k.w::<D>(r, h) * dv;
-            if r > 0.0 {
-                for a in 0..3 {
-                    grad[a] += k.dw::<D>(r, h) * p[a] / r * dv;
-                }
+/// ∫W dV and ∫∇W dV by a midpoint sum on a lattice of spacing h/40 over the support (160 points
+/// across its 4h),
+/// shifted by `offset` along x: the normalisation check of VALIDATION.md §A (`strike validate
+/// --case kernel`).
+pub fn moments<const D: usize, K: Kernel>(k: K, h: f64, offset: f64) -> (f64, [f64; 3]) {
+    let n = 160i64; // lattice points across the support
+    let dx = 4.0 * h / n as f64;
+    let mut integral = 0.0;
+    let mut grad = [0.0; 3];
+    let range = -(n / 2)..(n / 2);
+    let mut visit = |p: [f64; 3]| {
+        let r = (p[0] * p[0] + p[1] * p[1] + p[2] * p[2]).sqrt();
+        let dv = dx.powi(D as i32);
+        integral += k.w::<D>(r, h) * dv;
+        if r > 0.0 {
+            for a in 0..3 {
+                grad[a] += k.dw::<D>(r, h) * p[a] / r * dv;
             }
-        };
-        for i in range.clone() {
-            for j in range.clone() {
-                let x = (i as f64 + 0.5) * dx + offset;
-                let y = (j as f64 + 0.5) * dx;
-                if D == 2 {
-                    visit([x, y, 0.0]);
-                } else {
-                    for l in range.clone() {
-                        visit([x, y, (l as f64 + 0.5) * dx]);
-                    }
+        }
+    };
+    for i in range.clone() {
+        for j in range.clone() {
+            let x = (i as f64 + 0.5) * dx + offset;
+            let y = (j as f64 + 0.5) * dx;
+            if D == 2 {
+                visit([x, y, 0.0]);
+            } else {
+                for l in range.clone() {
+                    visit([x, y, (l as f64 + 0.5) * dx]);
                 }
             }
         }
-        (integral, grad)
     }
+    (integral, grad)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
 
     fn check<const D: usize, K: Kernel>(k: K) {
         let h = 0.37;

@@ -105,7 +105,8 @@ enum Command {
         /// The README's resolutions (slower) instead of the coarse ones.
         #[arg(long)]
         fine: bool,
-        /// Only these cases (repeatable): elastic_wave, hel, energy, planar_impact, bars,
+        /// Only these cases (repeatable): kernel, consistency, contact_direction, elastic_wave,
+        /// hel, energy, planar_impact, bars,
         /// slow_bars, striker, sliding, incline, rubber_rings, hertz, planar_7kms, sphere_plate,
         /// spall, taylor.
         #[arg(long = "case", value_name = "NAME")]
