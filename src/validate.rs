@@ -333,6 +333,16 @@ fn formulation_label(f: Formulation) -> &'static str {
     }
 }
 
+/// "conventional SPH, Δp = 0.5 mm": a column case's formulation and the spacing of its column
+/// (body 1).
+fn column_setting(case: &Case) -> String {
+    format!(
+        "{}, Δp = {} mm",
+        formulation_label(case.simulation.formulation),
+        case.bodies[1].spacing * 1e3
+    )
+}
+
 /// A profile along x (m, shown in mm) of one formulation's run against a reference.
 fn profile_figure(
     f: Formulation,
@@ -422,11 +432,7 @@ pub fn elastic_wave(_fine: bool) -> Result<Outcome> {
         let (t1, x1) = (sim.state.time, front(&sim, 0.5 * v));
         run_to(&mut sim, 12e-6)?;
         let (t2, x2) = (sim.state.time, front(&sim, 0.5 * v));
-        let setting = format!(
-            "{}, Δp = {} mm",
-            formulation_label(f),
-            case.bodies[1].spacing * 1e3
-        );
+        let setting = column_setting(&case);
         checks.push(
             Check::new(
                 "front speed",
@@ -505,11 +511,7 @@ pub fn hel(_fine: bool) -> Result<Outcome> {
         checks.push(
             Check::new(
                 "share yielded behind the plastic wave",
-                format!(
-                    "{}, Δp = {} mm",
-                    formulation_label(f),
-                    case.bodies[1].spacing * 1e3
-                ),
+                column_setting(&case),
                 yielded as f64 / behind.len().max(1) as f64,
                 "",
                 "elastic–plastic uniaxial strain: the plastic wave follows the precursor",
@@ -519,11 +521,7 @@ pub fn hel(_fine: bool) -> Result<Outcome> {
         checks.push(
             Check::new(
                 "elastic precursor",
-                format!(
-                    "{}, Δp = {} mm",
-                    formulation_label(f),
-                    case.bodies[1].spacing * 1e3
-                ),
+                column_setting(&case),
                 precursor,
                 "Pa",
                 "Y (1 − ν)/(1 − 2ν)",
@@ -572,11 +570,7 @@ pub fn energy(_fine: bool) -> Result<Outcome> {
             .map(|d| (d.momentum[0] - p0).abs())
             .fold(0.0, f64::max)
             / hist[0].momentum_scale;
-        let setting = format!(
-            "{}, Δp = {} mm",
-            formulation_label(f),
-            case.bodies[1].spacing * 1e3
-        );
+        let setting = column_setting(&case);
         checks.push(
             Check::new(
                 "energy error",

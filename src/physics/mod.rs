@@ -985,13 +985,7 @@ type = "welded"
 "#;
         let case = crate::deck::parse(deck, "lanes.toml").unwrap();
         let (mut p, model) = crate::setup::build::<3>(&case).unwrap();
-        let mut seed = 99u64;
-        let mut rnd = || {
-            seed = seed
-                .wrapping_mul(6364136223846793005)
-                .wrapping_add(1442695040888963407);
-            (seed >> 11) as f64 / (1u64 << 53) as f64 - 0.5
-        };
+        let mut rnd = crate::validate::blocks::uniform(99);
         for i in 0..p.len() {
             for k in 0..3 {
                 p.x[i][k] += 2e-4 * rnd();

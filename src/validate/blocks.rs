@@ -13,6 +13,17 @@ use crate::particles::{Particles, Tensor, Vector};
 use crate::physics::correction::{corrections, shepard};
 use crate::physics::{colour_states, compute_rates, Rates};
 
+/// A fixed pseudo-random sequence uniform on [−½, ½) from `seed` (Knuth's MMIX linear
+/// congruential generator, its top 53 bits): perturbed lattices that are the same on every run.
+pub fn uniform(mut seed: u64) -> impl FnMut() -> f64 {
+    move || {
+        seed = seed
+            .wrapping_mul(6364136223846793005)
+            .wrapping_add(1442695040888963407);
+        (seed >> 11) as f64 / (1u64 << 53) as f64 - 0.5
+    }
+}
+
 /// ∫W = 1 and ∫∇W = 0 to 1e-6 (∫∇W in units of 1/h) on a lattice of spacing h/40, centred and
 /// shifted by 0.3 of its spacing, and W = dW/dr = 0 at r = 2h: the cubic spline and Wendland C2,
 /// 2D and 3D (VALIDATION.md §A).
@@ -199,13 +210,7 @@ pub fn contact_direction(_fine: bool) -> Result<Outcome> {
 /// each axis (a fixed pseudo-random sequence), density 1 and mass 1.
 pub fn block<const D: usize>(n: usize, jitter: f64) -> Particles<D> {
     let mut p = Particles::<D>::default();
-    let mut seed = 12345u64;
-    let mut rnd = || {
-        seed = seed
-            .wrapping_mul(6364136223846793005)
-            .wrapping_add(1442695040888963407);
-        (seed >> 11) as f64 / (1u64 << 53) as f64 - 0.5
-    };
+    let mut rnd = uniform(12345u64);
     for k in 0..n.pow(D as u32) {
         let x =
             Vector::<D>::from_fn(|a, _| ((k / n.pow(a as u32)) % n) as f64 + 2.0 * jitter * rnd());
@@ -303,13 +308,7 @@ law = "{law}"
     let case = crate::deck::parse(&deck, "pressed.toml")?;
     let (mut p, mut model) = crate::setup::build::<3>(&case)?;
     model.formulation = formulation;
-    let mut seed = 4242u64;
-    let mut rnd = || {
-        seed = seed
-            .wrapping_mul(6364136223846793005)
-            .wrapping_add(1442695040888963407);
-        (seed >> 11) as f64 / (1u64 << 53) as f64 - 0.5
-    };
+    let mut rnd = uniform(4242u64);
     for i in 0..p.n_real {
         let facing = (p.x[i][2] - 5.5e-3).abs() < 1e-6 || (p.x[i][2] - 6.2e-3).abs() < 1e-6;
         for k in 0..3 {

@@ -156,31 +156,92 @@ fn mixing(rows: &[Row]) -> (f64, u64) {
         .fold((0.0, 0), |(p, m), x| (p.max(x.penetration), m.max(x.mixed)))
 }
 
+/// With a coarser run's error in `previous`, a check that this finer run's `error` is no
+/// larger (refinement does not move away from the answer); then `previous` becomes `error`.
+fn converges(
+    checks: &mut Vec<Check>,
+    previous: &mut Option<f64>,
+    error: f64,
+    quantity: &str,
+    setting: &str,
+) {
+    if let Some(e) = *previous {
+        checks.push(
+            Check::new(
+                quantity,
+                setting,
+                error,
+                "",
+                "refinement does not move away from the answer",
+            )
+            .at_most(e),
+        );
+    }
+    *previous = Some(error);
+}
+
 /// The checks every contact run shares: momentum to round-off (where no external force acts
 /// along the motion) and no two bodies' particles closer than half a spacing.
 fn contact_checks(checks: &mut Vec<Check>, rows: &[Row], setting: &str, momentum: bool) {
     if momentum {
-        checks.push(
-            Check::new(
-                "momentum error",
-                setting,
-                momentum_dev(rows),
-                "",
-                "no external force along the motion",
-            )
-            .at_most(1e-10),
-        );
+        checks.push(momentum_check(rows, setting));
     }
+    checks.push(closest_check(rows, setting));
+}
+
+const OF_KINETIC: &str = "of the initial kinetic energy";
+const IN_PLAY: &str = "of the largest kinetic + internal + contact energy";
+
+/// The energy error at most `limit`, relative to what `source` says.
+fn energy_check(setting: &str, error: f64, limit: f64, source: &'static str) -> Check {
+    Check::new("energy error", setting, error, "", source).at_most(limit)
+}
+
+/// Momentum to 1e-10 of Σ m|v| along every axis.
+fn momentum_check(rows: &[Row], setting: &str) -> Check {
+    Check::new(
+        "momentum error",
+        setting,
+        momentum_dev(rows),
+        "",
+        "no external force along the motion",
+    )
+    .at_most(1e-10)
+}
+
+/// No particle past the other body's surface layer by more than `depth` (Δp), and at most
+/// `count` particles past it.
+fn mixing_checks(
+    checks: &mut Vec<Check>,
+    rows: &[Row],
+    setting: &str,
+    (depth, count): (f64, f64),
+    source: &'static str,
+) {
+    let (pen, mixed) = mixing(rows);
     checks.push(
         Check::new(
-            "closest approach of the bodies",
+            "deepest penetration past the other's surface",
             setting,
-            closest(rows),
+            pen,
             "Δp",
-            "the contact keeps the bodies' particles apart (VALIDATION.md §B)",
+            source,
         )
-        .at_least(0.5),
+        .at_most(depth),
     );
+    checks.push(Check::new("particles mixed", setting, mixed as f64, "", source).at_most(count));
+}
+
+/// No two bodies' particles closer than half a spacing over the run.
+fn closest_check(rows: &[Row], setting: &str) -> Check {
+    Check::new(
+        "closest approach of the bodies",
+        setting,
+        closest(rows),
+        "Δp",
+        "the contact keeps the bodies' particles apart (VALIDATION.md §B)",
+    )
+    .at_least(0.5)
 }
 
 /// The longitudinal (uniaxial-strain) wave speed of the bars' elastic aluminium, √((K + 4G/3)/ρ).
@@ -268,43 +329,41 @@ pub fn planar_impact(fine: bool) -> Result<Outcome> {
                 if contact {
                     contact_checks(&mut checks, rows, &s, true);
                 } else {
-                    checks.push(
-                        Check::new(
-                            "momentum error",
-                            &s,
-                            momentum_dev(rows),
-                            "",
-                            "no external force along the motion",
-                        )
-                        .at_most(1e-10),
-                    );
+                    checks.push(momentum_check(rows, &s));
                 }
                 last = Some(run.profile);
             }
             if let Some((x, pr)) = last {
-                figures.push(Figure {
-                    name: format!(
-                        "pressure_{}_{}",
-                        if contact { "contact" } else { "welded" },
-                        tag(f)
-                    ),
-                    x_label: "x (mm)".into(),
-                    x: x.iter().map(|x| x * 1e3).collect(),
-                    panels: vec![(
-                        "target pressure at 1.2 µs (GPa)".into(),
-                        vec![
-                            (
-                                format!("strike, {}", formulation_label(f)),
-                                pr.iter().map(|p| p * 1e-9).collect(),
-                            ),
-                            ("Hugoniot".into(), vec![p * 1e-9; x.len()]),
-                        ],
-                    )],
-                });
+                let mut figure = pressure_figure(f, &x, &pr, p, "1.2 µs");
+                figure.name = format!(
+                    "pressure_{}_{}",
+                    if contact { "contact" } else { "welded" },
+                    tag(f)
+                );
+                figures.push(figure);
             }
         }
     }
     Ok(Outcome { checks, figures })
+}
+
+/// The target's pressure along x (m) at `when` against the Hugoniot's `p_h`: `pressure_<tag>`.
+fn pressure_figure(f: Formulation, x: &[f64], pressure: &[f64], p_h: f64, when: &str) -> Figure {
+    Figure {
+        name: format!("pressure_{}", tag(f)),
+        x_label: "x (mm)".into(),
+        x: x.iter().map(|x| x * 1e3).collect(),
+        panels: vec![(
+            format!("target pressure at {when} (GPa)"),
+            vec![
+                (
+                    format!("strike, {}", formulation_label(f)),
+                    pressure.iter().map(|p| p * 1e-9).collect(),
+                ),
+                ("Hugoniot".into(), vec![p_h * 1e-9; x.len()]),
+            ],
+        )],
+    }
 }
 
 struct PlanarRun {
@@ -450,6 +509,42 @@ fn release_checks(
     );
 }
 
+/// The interface stress on body 0 (its x contact force over the `width`) against the ideal
+/// rectangular pulse (start, duration, ρcv), in the unit (scale, name) given.
+fn stress_figure(
+    f: Formulation,
+    rows: &[Row],
+    width: f64,
+    (t0, duration, sigma): (f64, f64, f64),
+    (scale, unit): (f64, &str),
+) -> Figure {
+    let t: Vec<f64> = rows.iter().map(|r| r.d.time).collect();
+    let ideal = t
+        .iter()
+        .map(|&t| {
+            if t >= t0 && t < t0 + duration {
+                sigma * scale
+            } else {
+                0.0
+            }
+        })
+        .collect();
+    history(
+        format!("stress_{}", tag(f)),
+        &t,
+        &format!("interface stress ({unit})"),
+        vec![
+            (
+                format!("strike, {}", formulation_label(f)),
+                rows.iter()
+                    .map(|r| -r.d.body_contact_force[0][0] / width * scale)
+                    .collect(),
+            ),
+            ("ρ c v for 2L/c".into(), ideal),
+        ],
+    )
+}
+
 /// Makes each bar `length` long (the left one ending, the right one starting, where the deck
 /// has them), scales the end time with it, and sets the speeds to ±`v`.
 fn bars_at(case: &mut Case, length: f64, v: f64) -> Result<()> {
@@ -516,47 +611,18 @@ pub fn bars(fine: bool) -> Result<Outcome> {
                     .within(v, 0.05),
             );
             release_checks(&mut checks, (pl.tensile, pl.at_end), "N/m", &s);
-            checks.push(
-                Check::new(
-                    "energy error",
-                    &s,
-                    energy_dev(&rows, rows[0].d.kinetic),
-                    "",
-                    "of the initial kinetic energy",
-                )
-                .at_most(0.01),
-            );
+            checks.push(energy_check(
+                &s,
+                energy_dev(&rows, rows[0].d.kinetic),
+                0.01,
+                OF_KINETIC,
+            ));
             contact_checks(&mut checks, &rows, &s, true);
             last = Some((rows, pl.start));
         }
         if let Some((rows, t0)) = last {
-            let t: Vec<f64> = rows.iter().map(|r| r.d.time).collect();
-            let two_l_c = 2.0 * length / c;
-            figures.push(history(
-                format!("stress_{}", tag(f)),
-                &t,
-                "interface stress (GPa)",
-                vec![
-                    (
-                        format!("strike, {}", formulation_label(f)),
-                        rows.iter()
-                            .map(|r| -r.d.body_contact_force[0][0] / width * 1e-9)
-                            .collect(),
-                    ),
-                    (
-                        "ρ c v for 2L/c".into(),
-                        t.iter()
-                            .map(|&t| {
-                                if t >= t0 && t < t0 + two_l_c {
-                                    rho * c * v * 1e-9
-                                } else {
-                                    0.0
-                                }
-                            })
-                            .collect(),
-                    ),
-                ],
-            ));
+            let pulse = (t0, 2.0 * length / c, rho * c * v);
+            figures.push(stress_figure(f, &rows, width, pulse, (1e-9, "GPa")));
         }
     }
     for f in FORMULATIONS {
@@ -589,16 +655,7 @@ pub fn bars(fine: bool) -> Result<Outcome> {
             )
             .at_most(0.0),
         );
-        checks.push(
-            Check::new(
-                "momentum error",
-                &s,
-                momentum_dev(&rows),
-                "",
-                "no external force along the motion",
-            )
-            .at_most(1e-10),
-        );
+        checks.push(momentum_check(&rows, &s));
         let contact = rows
             .iter()
             .flat_map(|r| r.d.body_contact_force.iter())
@@ -684,64 +741,30 @@ pub fn slow_bars(fine: bool) -> Result<Outcome> {
                 });
             }
             let error = (end[1][0] / v - 1.0).abs();
-            if let Some(e) = previous {
-                checks.push(
-                    Check::new(
-                        "speed error, finer against coarser",
-                        &s,
-                        error,
-                        "",
-                        "refinement does not move away from the answer",
-                    )
-                    .at_most(e),
-                );
-            }
-            previous = Some(error);
+            converges(
+                &mut checks,
+                &mut previous,
+                error,
+                "speed error, finer against coarser",
+                &s,
+            );
             let (span, start, _, tensile, at_end) = half_pulse(&rows)?;
             checks.push(
                 Check::new("contact time at half the plateau", &s, span, "s", "2L/c")
                     .within(two_l_c, 0.05),
             );
             release_checks(&mut checks, (tensile, at_end), "N/m", &s);
-            checks.push(
-                Check::new(
-                    "energy error",
-                    &s,
-                    energy_dev(&rows, energy_in_play(&rows)),
-                    "",
-                    "of the largest kinetic + internal + contact energy",
-                )
-                .at_most(0.01),
-            );
+            checks.push(energy_check(
+                &s,
+                energy_dev(&rows, energy_in_play(&rows)),
+                0.01,
+                IN_PLAY,
+            ));
             last = Some((rows, start));
         }
         if let Some((rows, t0)) = last {
-            let t: Vec<f64> = rows.iter().map(|r| r.d.time).collect();
-            figures.push(history(
-                format!("stress_{}", tag(f)),
-                &t,
-                "interface stress (MPa)",
-                vec![
-                    (
-                        format!("strike, {}", formulation_label(f)),
-                        rows.iter()
-                            .map(|r| -r.d.body_contact_force[0][0] / width * 1e-6)
-                            .collect(),
-                    ),
-                    (
-                        "ρ c v for 2L/c".into(),
-                        t.iter()
-                            .map(|&t| {
-                                if t >= t0 && t < t0 + two_l_c {
-                                    rho * c * v * 1e-6
-                                } else {
-                                    0.0
-                                }
-                            })
-                            .collect(),
-                    ),
-                ],
-            ));
+            let pulse = (t0, two_l_c, rho * c * v);
+            figures.push(stress_figure(f, &rows, width, pulse, (1e-6, "MPa")));
         }
     }
     Ok(Outcome { checks, figures })
@@ -842,6 +865,29 @@ fn sliding_figures(rows: &[Row], case: &Case) -> Result<(f64, f64, f64)> {
     Ok((slider, base, touching))
 }
 
+/// The slider's largest relative change of tangential velocity, to be bounded.
+fn slider_change(setting: &str, change: f64, source: &'static str) -> Check {
+    Check::new(
+        "slider's tangential velocity change",
+        setting,
+        change,
+        "",
+        source,
+    )
+}
+
+/// The slider stays on the base: in contact at 99 % of the steps or more.
+fn in_contact(setting: &str, share: f64) -> Check {
+    Check::new(
+        "share of steps in contact",
+        setting,
+        share,
+        "",
+        "the slider rests on the base",
+    )
+    .at_least(0.99)
+}
+
 /// Frictionless sliding (`examples/sliding_{contact,welded}.toml`, soft blocks, Δp = 0.05 and
 /// 0.025 m): through the contact the slider keeps its tangential velocity within 1 % and the
 /// base takes under 1 % of its momentum, x momentum to 1e-10 (gravity and the symmetry plane
@@ -862,16 +908,7 @@ pub fn sliding(fine: bool) -> Result<Outcome> {
             let rows = run::<2>(&case)?;
             let (slider, moved, touching) = sliding_figures(&rows, &case)?;
             let s = setting(&case, &format!("Δp = {} m", case.bodies[0].spacing));
-            checks.push(
-                Check::new(
-                    "slider's tangential velocity change",
-                    &s,
-                    slider,
-                    "",
-                    frictionless,
-                )
-                .at_most(0.01),
-            );
+            checks.push(slider_change(&s, slider, frictionless).at_most(0.01));
             checks.push(
                 Check::new(
                     "base's tangential momentum / slider's",
@@ -882,16 +919,7 @@ pub fn sliding(fine: bool) -> Result<Outcome> {
                 )
                 .at_most(0.01),
             );
-            checks.push(
-                Check::new(
-                    "share of steps in contact",
-                    &s,
-                    touching,
-                    "",
-                    "the slider rests on the base",
-                )
-                .at_least(0.99),
-            );
+            checks.push(in_contact(&s, touching));
             let p0 = rows[0].d.momentum[0];
             let px = rows
                 .iter()
@@ -902,16 +930,7 @@ pub fn sliding(fine: bool) -> Result<Outcome> {
                 Check::new("x momentum error", &s, px, "", "no external force along x")
                     .at_most(1e-10),
             );
-            checks.push(
-                Check::new(
-                    "closest approach of the bodies",
-                    &s,
-                    closest(&rows),
-                    "Δp",
-                    "the contact keeps the bodies' particles apart (VALIDATION.md §B)",
-                )
-                .at_least(0.5),
-            );
+            checks.push(closest_check(&rows, &s));
             last = Some(rows);
         }
         for &k in factors(fine) {
@@ -919,16 +938,7 @@ pub fn sliding(fine: bool) -> Result<Outcome> {
             let rows = run::<2>(&case)?;
             let (slider, _, _) = sliding_figures(&rows, &case)?;
             let s = setting(&case, &format!("welded, Δp = {} m", case.bodies[0].spacing));
-            checks.push(
-                Check::new(
-                    "slider's tangential velocity change",
-                    &s,
-                    slider,
-                    "",
-                    "a weld transmits shear",
-                )
-                .at_least(0.10),
-            );
+            checks.push(slider_change(&s, slider, "a weld transmits shear").at_least(0.10));
         }
         for n in [4.0, 6.0] {
             let ks: &[f64] = match f {
@@ -949,14 +959,7 @@ pub fn sliding(fine: bool) -> Result<Outcome> {
                 );
                 let source = "frictionless: the slider keeps its velocity (issue 12: 99 %)";
                 checks.push(match f {
-                    Formulation::Corrected => Check::new(
-                        "slider's tangential velocity change",
-                        &s,
-                        slider,
-                        "",
-                        source,
-                    )
-                    .at_most(0.01),
+                    Formulation::Corrected => slider_change(&s, slider, source).at_most(0.01),
                     // The corrugation's friction: shown, not held.
                     Formulation::Conventional => Check::new(
                         "slider's velocity kept at the end",
@@ -967,16 +970,7 @@ pub fn sliding(fine: bool) -> Result<Outcome> {
                     )
                     .reported(1.0),
                 });
-                checks.push(
-                    Check::new(
-                        "share of steps in contact",
-                        &s,
-                        touching,
-                        "",
-                        "the slider rests on the base",
-                    )
-                    .at_least(0.99),
-                );
+                checks.push(in_contact(&s, touching));
             }
         }
         if let Some(rows) = last {
@@ -1039,16 +1033,7 @@ pub fn incline(fine: bool) -> Result<Outcome> {
                 Check::new("largest relative error from 0.3 s", &s, worst, "", source)
                     .at_most(0.05),
             );
-            checks.push(
-                Check::new(
-                    "closest approach of the bodies",
-                    &s,
-                    closest(&rows),
-                    "Δp",
-                    "the contact keeps the bodies' particles apart (VALIDATION.md §B)",
-                )
-                .at_least(0.5),
-            );
+            checks.push(closest_check(&rows, &s));
             last = Some(rows);
         }
         if let Some(rows) = last {
@@ -1162,16 +1147,12 @@ pub fn rubber_rings(_fine: bool) -> Result<Outcome> {
             )
             .at_most(64.0),
         );
-        checks.push(
-            Check::new(
-                "energy error",
-                &s,
-                energy_dev(&rows, rows[0].d.kinetic),
-                "",
-                "of the initial kinetic energy",
-            )
-            .at_most(0.02),
-        );
+        checks.push(energy_check(
+            &s,
+            energy_dev(&rows, rows[0].d.kinetic),
+            0.02,
+            OF_KINETIC,
+        ));
         contact_checks(&mut checks, &rows, &s, true);
     }
     Ok(Outcome {
@@ -1266,19 +1247,13 @@ pub fn hertz(fine: bool) -> Result<Outcome> {
             let error = (f_max / f_hertz - 1.0)
                 .abs()
                 .max((t_c / t_hertz - 1.0).abs());
-            if let Some(e) = previous {
-                checks.push(
-                    Check::new(
-                        "larger error, finer against coarser",
-                        &s,
-                        error,
-                        "",
-                        "refinement does not move away from the answer",
-                    )
-                    .at_most(e),
-                );
-            }
-            previous = Some(error);
+            converges(
+                &mut checks,
+                &mut previous,
+                error,
+                "larger error, finer against coarser",
+                &s,
+            );
             // Tensile: the most negative force, as a positive number.
             let tensile = 0.0 - force.iter().map(|f| f.1).fold(0.0, f64::min);
             release_checks(
@@ -1298,26 +1273,12 @@ pub fn hertz(fine: bool) -> Result<Outcome> {
                 )
                 .at_least(0.95),
             );
-            let (pen, mixed) = mixing(&rows);
-            checks.push(
-                Check::new(
-                    "deepest penetration past the other's surface",
-                    &s,
-                    pen,
-                    "Δp",
-                    "no mixing (VALIDATION.md §D)",
-                )
-                .at_most(0.0),
-            );
-            checks.push(
-                Check::new(
-                    "particles mixed",
-                    &s,
-                    mixed as f64,
-                    "",
-                    "no mixing (VALIDATION.md §D)",
-                )
-                .at_most(0.0),
+            mixing_checks(
+                &mut checks,
+                &rows,
+                &s,
+                (0.0, 0.0),
+                "no mixing (VALIDATION.md §D)",
             );
             let energy = match f {
                 Formulation::Conventional => energy_dev(&rows, energy_in_play(&rows)),
@@ -1325,16 +1286,7 @@ pub fn hertz(fine: bool) -> Result<Outcome> {
                     (end.d.total - rows[0].d.total).abs() / energy_in_play(&rows)
                 }
             };
-            checks.push(
-                Check::new(
-                    "energy error",
-                    &s,
-                    energy,
-                    "",
-                    "of the largest kinetic + internal + contact energy",
-                )
-                .at_most(0.01),
-            );
+            checks.push(energy_check(&s, energy, 0.01, IN_PLAY));
             last = Some((force, t_on));
         }
         if let Some((force, t_on)) = last {
@@ -1438,26 +1390,12 @@ pub fn planar_7kms(fine: bool) -> Result<Outcome> {
                 plateau.iter().map(|&i| g(i)).sum::<f64>() / plateau.len().max(1) as f64
             };
             let s = setting(&case, &spacing_mm(&case));
-            let (pen, mixed) = mixing(&rows);
-            checks.push(
-                Check::new(
-                    "deepest penetration past the other's surface",
-                    &s,
-                    pen,
-                    "Δp",
-                    "no interdigitation (VALIDATION.md §D)",
-                )
-                .at_most(0.0),
-            );
-            checks.push(
-                Check::new(
-                    "particles mixed",
-                    &s,
-                    mixed as f64,
-                    "",
-                    "no interdigitation (VALIDATION.md §D)",
-                )
-                .at_most(0.0),
+            mixing_checks(
+                &mut checks,
+                &rows,
+                &s,
+                (0.0, 0.0),
+                "no interdigitation (VALIDATION.md §D)",
             );
             checks.push(
                 Check::new(
@@ -1520,37 +1458,19 @@ pub fn planar_7kms(fine: bool) -> Result<Outcome> {
                 )
                 .within(compression, 0.05),
             );
-            checks.push(
-                Check::new(
-                    "energy error",
-                    &s,
-                    energy_dev(&rows, energy_in_play(&rows)),
-                    "",
-                    "of the largest kinetic + internal + contact energy",
-                )
-                .at_most(0.01),
-            );
+            checks.push(energy_check(
+                &s,
+                energy_dev(&rows, energy_in_play(&rows)),
+                0.01,
+                IN_PLAY,
+            ));
             contact_checks(&mut checks, &rows, &s, false);
             last = Some(profile(&sim, (interface, front + 1.0e-3, 2.0 * dp), |i| {
                 p.p[i]
             }));
         }
         if let Some((x, pr)) = last {
-            figures.push(Figure {
-                name: format!("pressure_{}", tag(f)),
-                x_label: "x (mm)".into(),
-                x: x.iter().map(|x| x * 1e3).collect(),
-                panels: vec![(
-                    "target pressure at 1.5 µs (GPa)".into(),
-                    vec![
-                        (
-                            format!("strike, {}", formulation_label(f)),
-                            pr.iter().map(|p| p * 1e-9).collect(),
-                        ),
-                        ("Hugoniot".into(), vec![p_h * 1e-9; x.len()]),
-                    ],
-                )],
-            });
+            figures.push(pressure_figure(f, &x, &pr, p_h, "1.5 µs"));
         }
     }
     Ok(Outcome { checks, figures })
@@ -1603,7 +1523,6 @@ pub fn sphere_plate(fine: bool) -> Result<Outcome> {
             .map(|r| (r.d.momentum[2] - pz0).abs())
             .fold(0.0, f64::max)
             / pz0.abs();
-        let (pen, mixed) = mixing(&rows);
         let rear: Vec<usize> = (0..p.n_real)
             .filter(|&i| p.body[i] == 0 && z0[p.id[i] as usize] > rear_z0)
             .collect();
@@ -1619,36 +1538,19 @@ pub fn sphere_plate(fine: bool) -> Result<Outcome> {
         let below = plug.iter().filter(|&&i| p.x[i][2] < rear_face).count() as f64
             / plug.len().max(1) as f64;
         let demo = "the paper's demonstration (VALIDATION.md §C)";
-        checks.push(
-            Check::new(
-                "deepest penetration past the other's surface",
-                &s,
-                pen,
-                "Δp",
-                "no mixing beyond a few hundredths of Δp at R/Δp = 6 (VALIDATION.md §D)",
-            )
-            .at_most(0.1),
+        mixing_checks(
+            &mut checks,
+            &rows,
+            &s,
+            (0.1, 2.0),
+            "no mixing beyond a few hundredths of Δp at R/Δp = 6 (VALIDATION.md §D)",
         );
-        checks.push(
-            Check::new(
-                "particles mixed",
-                &s,
-                mixed as f64,
-                "",
-                "no mixing beyond two particles at R/Δp = 6",
-            )
-            .at_most(2.0),
-        );
-        checks.push(
-            Check::new(
-                "energy error",
-                &s,
-                energy,
-                "",
-                "of the initial energy (VALIDATION.md §C)",
-            )
-            .at_most(0.05),
-        );
+        checks.push(energy_check(
+            &s,
+            energy,
+            0.05,
+            "of the initial energy (VALIDATION.md §C)",
+        ));
         checks.push(
             Check::new("z momentum error", &s, pz, "", "no external force along z").at_most(1e-10),
         );
