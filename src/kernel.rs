@@ -175,9 +175,8 @@ impl Kernel for WendlandC2 {
 }
 
 /// ∫W dV and ∫∇W dV by a midpoint sum on a lattice of spacing h/40 over the support (160 points
-/// across its 4h),
-/// shifted by `offset` along x: the normalisation check of VALIDATION.md §A (`strike validate
-/// --case kernel`).
+/// across its 4h), shifted by `offset` along x: the normalisation check of VALIDATION.md §A
+/// (`strike validate --case kernel`).
 pub fn moments<const D: usize, K: Kernel>(k: K, h: f64, offset: f64) -> (f64, [f64; 3]) {
     let n = 160i64; // lattice points across the support
     let dx = 4.0 * h / n as f64;

@@ -4,7 +4,9 @@
 //!
 //! Each case is a function of the resolution (coarse: the CI's; `--fine`: the README's) that
 //! runs one or more decks and returns its [`Check`]s — a measured figure against a reference
-//! with a relative tolerance — and [`Figure`]s against the reference where one fits. The
+//! with a relative tolerance, or against a limit ([`Bound`]) — and [`Figure`]s against the
+//! reference where one fits. Here: the engine's and the materials' cases; [`contact`]: the
+//! contact's; [`blocks`]: the building blocks (kernel, consistency, contact direction). The
 //! verification tests call the same functions, so the command and the tests measure alike.
 //! The decks are built into the program (the `examples/` files), so the command runs from any
 //! folder.
