@@ -8,7 +8,7 @@
 //! tests (`tests/verification_contact.rs`, `tests/contact_fidelity.rs`, `tests/sphere_plate.rs`)
 //! call these functions.
 
-use super::{example, formulation_label, profile, Check, Figure, Outcome};
+use super::{example, formulation_label, front, profile, Check, Figure, Outcome};
 use crate::case::{Case, ContactLaw, Formulation, InteractionKind, Shape};
 use crate::error::{Error, Result};
 use crate::simulation::{Diagnostics, Simulation};
@@ -390,23 +390,9 @@ fn planar_run(case: &Case) -> Result<PlanarRun> {
     let dp = case.bodies[1].spacing;
     for t_stop in [0.6e-6, 1.2e-6] {
         rows.extend(record(&mut sim, t_stop, |_| {})?);
-        let p = &sim.particles;
-        let mut columns = std::collections::BTreeMap::<i64, (f64, f64, f64)>::new();
-        for i in (0..p.n_real).filter(|&i| p.body[i] == 1) {
-            let c = columns.entry((p.x[i][0] / dp).round() as i64).or_default();
-            *c = (c.0 + p.x[i][0], c.1 + p.v[i][0], c.2 + 1.0);
-        }
-        let prof: Vec<(f64, f64)> = columns.values().map(|c| (c.0 / c.2, c.1 / c.2)).collect();
-        let k = prof
-            .iter()
-            .rposition(|c| c.1 > half)
-            .filter(|&k| k + 1 < prof.len())
-            .ok_or_else(|| {
-                Error::Invalid(format!("{}: no shock front in the target", case.name))
-            })?;
-        let ((x0, v0), (x1, v1)) = (prof[k], prof[k + 1]);
-        let front = x0 + (v0 - half) / (v0 - v1) * (x1 - x0);
+        let front = front(&sim, half, dp)?;
         fronts.push((sim.state.time, front));
+        let p = &sim.particles;
         for i in (0..p.n_real)
             .filter(|&i| p.body[i] == 1 && p.x[i][0] > 0.5e-3 && p.x[i][0] < front - 0.5e-3)
         {
