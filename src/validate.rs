@@ -456,11 +456,11 @@ fn front(sim: &Simulation<2>, v: f64, dp: f64) -> Result<f64> {
 pub fn elastic_wave(fine: bool) -> Result<Outcome> {
     let mut checks = Vec::new();
     let mut figures = Vec::new();
-    for (f, k, finest) in column_runs(fine) {
+    for (f, factor, finest) in column_runs(fine) {
         let mut case = example("elastic_wave")?;
         case.simulation.formulation = f;
         for b in &mut case.bodies {
-            b.spacing *= k;
+            b.spacing *= factor;
         }
         let (rho, k, g) = elastic_constants(&case);
         let c = ((k + 4.0 / 3.0 * g) / rho).sqrt();
@@ -523,11 +523,11 @@ pub fn elastic_wave(fine: bool) -> Result<Outcome> {
 pub fn hel(fine: bool) -> Result<Outcome> {
     let mut checks = Vec::new();
     let mut figures = Vec::new();
-    for (f, k, finest) in column_runs(fine) {
+    for (f, factor, finest) in column_runs(fine) {
         let mut case = example("hugoniot_elastic_limit")?;
         case.simulation.formulation = f;
         for b in &mut case.bodies {
-            b.spacing *= k;
+            b.spacing *= factor;
         }
         let (_, k, g) = elastic_constants(&case);
         let y = match case.materials[case.bodies[1].material].strength {
@@ -604,11 +604,11 @@ pub fn hel(fine: bool) -> Result<Outcome> {
 pub fn energy(fine: bool) -> Result<Outcome> {
     let mut checks = Vec::new();
     let mut figures = Vec::new();
-    for (f, k, finest) in column_runs(fine) {
+    for (f, factor, finest) in column_runs(fine) {
         let mut case = example("elastic_wave")?;
         case.simulation.formulation = f;
         for b in &mut case.bodies {
-            b.spacing *= k;
+            b.spacing *= factor;
         }
         case.bodies[0].motion = crate::case::Motion::Free;
         let mut sim = Simulation::<2>::new(&case)?;
