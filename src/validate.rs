@@ -355,6 +355,16 @@ fn column_runs(fine: bool) -> Vec<(Formulation, f64, bool)> {
         .collect()
 }
 
+/// `case` with every spacing times `factor`, in `formulation`.
+fn variant(case: &Case, factor: f64, formulation: Formulation) -> Case {
+    let mut c = case.clone();
+    for b in &mut c.bodies {
+        b.spacing *= factor;
+    }
+    c.simulation.formulation = formulation;
+    c
+}
+
 /// "conventional SPH, Δp = 0.5 mm": a column case's formulation and the spacing of its column
 /// (body 1).
 fn column_setting(case: &Case) -> String {
@@ -457,11 +467,7 @@ pub fn elastic_wave(fine: bool) -> Result<Outcome> {
     let mut checks = Vec::new();
     let mut figures = Vec::new();
     for (f, factor, finest) in column_runs(fine) {
-        let mut case = example("elastic_wave")?;
-        case.simulation.formulation = f;
-        for b in &mut case.bodies {
-            b.spacing *= factor;
-        }
+        let case = variant(&example("elastic_wave")?, factor, f);
         let (rho, k, g) = elastic_constants(&case);
         let c = ((k + 4.0 / 3.0 * g) / rho).sqrt();
         let v = case.bodies[0].velocity[0];
@@ -524,11 +530,7 @@ pub fn hel(fine: bool) -> Result<Outcome> {
     let mut checks = Vec::new();
     let mut figures = Vec::new();
     for (f, factor, finest) in column_runs(fine) {
-        let mut case = example("hugoniot_elastic_limit")?;
-        case.simulation.formulation = f;
-        for b in &mut case.bodies {
-            b.spacing *= factor;
-        }
+        let case = variant(&example("hugoniot_elastic_limit")?, factor, f);
         let (_, k, g) = elastic_constants(&case);
         let y = match case.materials[case.bodies[1].material].strength {
             StrengthSpec::VonMises { yield_stress, .. } => yield_stress,
@@ -605,11 +607,7 @@ pub fn energy(fine: bool) -> Result<Outcome> {
     let mut checks = Vec::new();
     let mut figures = Vec::new();
     for (f, factor, finest) in column_runs(fine) {
-        let mut case = example("elastic_wave")?;
-        case.simulation.formulation = f;
-        for b in &mut case.bodies {
-            b.spacing *= factor;
-        }
+        let mut case = variant(&example("elastic_wave")?, factor, f);
         case.bodies[0].motion = crate::case::Motion::Free;
         let mut sim = Simulation::<2>::new(&case)?;
         let hist = run_to(&mut sim, 12e-6)?;

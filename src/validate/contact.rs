@@ -8,7 +8,7 @@
 //! tests (`tests/verification_contact.rs`, `tests/contact_fidelity.rs`, `tests/sphere_plate.rs`)
 //! call these functions.
 
-use super::{example, formulation_label, front, profile, Check, Figure, Outcome};
+use super::{example, formulation_label, front, profile, variant, Check, Figure, Outcome};
 use crate::case::{Case, ContactLaw, Formulation, InteractionKind, Shape};
 use crate::error::{Error, Result};
 use crate::simulation::{Diagnostics, Simulation};
@@ -74,16 +74,6 @@ fn factors(fine: bool) -> &'static [f64] {
     } else {
         &[1.0]
     }
-}
-
-/// `case` with every spacing times `factor`, in `formulation`.
-fn variant(case: &Case, factor: f64, formulation: Formulation) -> Case {
-    let mut c = case.clone();
-    for b in &mut c.bodies {
-        b.spacing *= factor;
-    }
-    c.simulation.formulation = formulation;
-    c
 }
 
 /// Every contact between bodies through the paper's form of eq. (5), exponent `n` (its
