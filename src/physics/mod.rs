@@ -215,29 +215,20 @@ pub struct Rates<const D: usize> {
     /// Per-particle artificial stress R (all particles, ghosts included, and a zero at the end
     /// for the padding; empty when no material uses it).
     art: Vec<Tensor<D>>,
-    /// Per-particle gradient correction (CN-SPH; ghosts included, and a record for the
+    /// Per-particle gradient correction B (CN-SPH; ghosts included, and the identity for the
     /// padding; empty in conventional SPH).
-    corr: Vec<Corrected<D>>,
+    corr: Vec<Matrix<D>>,
+    /// (σ/ρ²) B per particle, likewise: the particle's side of the pair force,
+    /// (σ_i/ρ_i²) B_i ∇W + (σ_j/ρ_j²) B_j ∇W. Apart from B, which only the particle itself
+    /// reads, so that a neighbour costs 9 numbers, not 18.
+    sb: Vec<Matrix<D>>,
 }
 
-/// What CN-SPH's pass reads of a particle's correction B, in plain arrays (row-major), as
-/// [`Gather`].
-#[derive(Debug, Clone, Copy)]
-struct Corrected<const D: usize> {
-    /// B.
-    b: [[f64; D]; D],
-    /// (σ/ρ²) B: the particle's side of the pair force, (σ_i/ρ_i²) B_i ∇W + (σ_j/ρ_j²) B_j ∇W.
-    sb: [[f64; D]; D],
-}
+/// A D × D matrix in plain arrays (row-major), as the pass reads it.
+type Matrix<const D: usize> = [[f64; D]; D];
 
-impl<const D: usize> Corrected<D> {
-    fn new(b: &Tensor<D>, sr2: &Tensor<D>) -> Self {
-        let sb = sr2 * b;
-        Corrected {
-            b: std::array::from_fn(|r| std::array::from_fn(|c| b[(r, c)])),
-            sb: std::array::from_fn(|r| std::array::from_fn(|c| sb[(r, c)])),
-        }
-    }
+fn matrix<const D: usize>(m: &Tensor<D>) -> Matrix<D> {
+    std::array::from_fn(|r| std::array::from_fn(|c| m[(r, c)]))
 }
 
 /// What the pass reads besides the particle's own neighbour list.
@@ -245,7 +236,8 @@ impl<const D: usize> Corrected<D> {
 struct Pass<'a, const D: usize> {
     gather: &'a [Gather<D>],
     art: &'a [Tensor<D>],
-    corr: &'a [Corrected<D>],
+    corr: &'a [Matrix<D>],
+    sb: &'a [Matrix<D>],
     colour: &'a [ColourState],
     /// Pressures (ghosts included): what a pair with a failed member passes on.
     pressure: &'a [f64],
@@ -401,6 +393,7 @@ fn compute_rates_on<const D: usize, K: Kernel>(
     }));
     out.gather.push(Gather::padding());
     out.corr.clear();
+    out.sb.clear();
     let cn = !corr.is_empty();
     if cn {
         assert_eq!(
@@ -408,15 +401,15 @@ fn compute_rates_on<const D: usize, K: Kernel>(
             all,
             "a correction for every particle, ghosts included"
         );
-        out.corr.par_extend(
+        out.corr
+            .par_extend((0..all).into_par_iter().map(|i| matrix(&corr[i])));
+        out.corr.push(matrix(&Tensor::<D>::identity()));
+        out.sb.par_extend(
             (0..all)
                 .into_par_iter()
-                .map(|i| Corrected::new(&corr[i], &(p.stress(i) / (p.rho[i] * p.rho[i])))),
+                .map(|i| matrix(&(p.stress(i) / (p.rho[i] * p.rho[i]) * corr[i]))),
         );
-        out.corr.push(Corrected::new(
-            &Tensor::<D>::identity(),
-            &Tensor::<D>::zeros(),
-        ));
+        out.sb.push(matrix(&Tensor::<D>::zeros()));
     }
     out.art.clear();
     if any_art {
@@ -438,6 +431,7 @@ fn compute_rates_on<const D: usize, K: Kernel>(
         gather: &out.gather,
         art: &out.art,
         corr: &out.corr,
+        sb: &out.sb,
         colour,
         pressure: &p.p,
         model,
@@ -785,6 +779,7 @@ fn conserve_chunk<const D: usize, K: Kernel, const ART: bool, const CN: bool>(
         gather,
         art,
         corr,
+        sb,
         model,
         ..
     } = *pass;
@@ -792,13 +787,9 @@ fn conserve_chunk<const D: usize, K: Kernel, const ART: bool, const CN: bool>(
     // CN-SPH: i's B and (σ/ρ²) B, and each lane's neighbour's (σ/ρ²) B, copied out (with their
     // bounds checks) before the lanes' arithmetic, which then vectorises.
     let zero = [[0.0; D]; D];
-    let (bi, sbi) = if CN {
-        (corr[i].b, corr[i].sb)
-    } else {
-        (zero, zero)
-    };
+    let (bi, sbi) = if CN { (corr[i], sb[i]) } else { (zero, zero) };
     let sbj: [[[f64; D]; D]; LANES] = if CN {
-        std::array::from_fn(|l| corr[js[l] as usize].sb)
+        std::array::from_fn(|l| sb[js[l] as usize])
     } else {
         [zero; LANES]
     };
@@ -904,7 +895,7 @@ fn tension_cut<const D: usize, K: Kernel, const CN: bool>(
         std::array::from_fn(|a| {
             std::array::from_fn(|b| {
                 if CN {
-                    pass.corr[k].sb[a][b] + squeeze * pass.corr[k].b[a][b]
+                    pass.sb[k][a][b] + squeeze * pass.corr[k][a][b]
                 } else {
                     g.sr2[sym(a, b)] + if a == b { squeeze } else { 0.0 }
                 }
@@ -1032,6 +1023,30 @@ type = "welded"
             .all(|r| r.acc.norm() > 0.0 && r.de != 0.0));
         for (i, (a, b)) in wide.particles.iter().zip(&portable.particles).enumerate() {
             assert_eq!(a, b, "particle {i}");
+        }
+        // CN-SPH: the correction pass, then the rates with B.
+        let joined =
+            |a: u32, b: u32| a == b || matches!(model.pairs.rule(a, b), PairRule::Conserve);
+        let (mut cw, mut cp) = (Vec::new(), Vec::new());
+        correction::corrections_on(CubicSpline, &p, &nl, joined, &mut cw, true);
+        correction::corrections_on(CubicSpline, &p, &nl, joined, &mut cp, false);
+        assert_eq!(cw, cp);
+        assert!(cw
+            .iter()
+            .any(|c| !c.fallback && c.b != Tensor::<3>::identity()));
+        let b: Vec<Tensor<3>> = cw.iter().map(|c| c.b).collect();
+        compute_rates_on(CubicSpline, &p, &nl, &model, (&states, &b), &mut wide, true);
+        compute_rates_on(
+            CubicSpline,
+            &p,
+            &nl,
+            &model,
+            (&states, &b),
+            &mut portable,
+            false,
+        );
+        for (i, (a, b)) in wide.particles.iter().zip(&portable.particles).enumerate() {
+            assert_eq!(a, b, "CN-SPH, particle {i}");
         }
     }
 
