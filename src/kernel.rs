@@ -295,7 +295,7 @@ mod tests {
     #[test]
     fn grad_factors_are_grad_factor_bit_for_bit() {
         fn check<const D: usize, K: Kernel>(k: K) {
-            // Inside (q < 1), outside (1 ≤ q < 2), at q = 1 and 2, beyond, and h varying.
+            // q < 1, 1 ≤ q < 2 and q ≥ 2, with h varying from pair to pair.
             let r = [0.1, 0.5, 0.99, 1.0, 1.5, 1.999, 2.0, 3.0];
             let h: [f64; 8] = std::array::from_fn(|l| 0.9 + 0.05 * l as f64);
             let lanes = k.grad_factors::<D, 8>(&r, &h);
