@@ -49,10 +49,11 @@ impl Ghosts {
             let n = p.len();
             self.first.push(self.sources.len());
             self.mirrored[pi].clear();
+            self.mirrored[pi].extend((0..n).map(|i| plane.depth(p.x[i][plane.axis]) < reach));
+            let count = self.mirrored[pi].iter().filter(|&&m| m).count();
+            p.reserve_exact(count);
             for i in 0..n {
-                let near = plane.depth(p.x[i][plane.axis]) < reach;
-                self.mirrored[pi].push(near);
-                if near {
+                if self.mirrored[pi][i] {
                     p.push_copy(i);
                     self.sources.push(i);
                 }

@@ -93,7 +93,7 @@ pub fn mixing<const D: usize, K: Kernel>(
         .fold(
             || vec![PairMixing::default(); pairs],
             |mut acc, i| {
-                particle(kernel, p, &nl.lists[i], i, spacing, &mut acc);
+                particle(kernel, p, nl.list(i), i, spacing, &mut acc);
                 acc
             },
         )

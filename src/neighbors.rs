@@ -59,8 +59,10 @@ const KEY_MAX: i64 = (1 << KEY_BITS) - 1;
 /// that rebuilding allocates nothing once the run has settled.
 #[derive(Debug, Default, Clone)]
 pub struct NeighborList {
-    /// lists[i]: neighbours of real particle i.
-    pub lists: Vec<Vec<u32>>,
+    /// The lists of the real particles, CHUNK particles to a chunk (see [`ListChunk`]).
+    chunks: Vec<ListChunk>,
+    /// Number of real particles (lists).
+    n_lists: usize,
     /// Particles in cell order.
     sorted: Vec<u32>,
     /// Dense: start of each cell in `sorted` (len cells + 1). Sparse: start of each occupied
@@ -69,8 +71,9 @@ pub struct NeighborList {
     cell_key: Vec<u64>,
     /// Next free slot of each cell during the counting sort.
     fill: Vec<u32>,
-    /// Cell coordinates of each particle, and (sparse) key-index pairs for sorting.
-    coords: Vec<[i64; 3]>,
+    /// Cell coordinates of each particle (i32 is plenty: a grid has at most 2^KEY_BITS cells an
+    /// axis), and (sparse) key-index pairs for sorting.
+    coords: Vec<[i32; 3]>,
     keyed: Vec<(u64, u32)>,
     /// Positions and support radii (h + skin/2) in cell order, so that scanning a run of
     /// candidates reads memory in sequence.
@@ -98,6 +101,30 @@ pub struct NeighborList {
     /// Per real particle: whether its list holds a particle of another class (body), as of the
     /// last [`NeighborList::classify`].
     pub mixed: Vec<bool>,
+}
+
+/// Particles per chunk of lists (a power of two).
+const CHUNK_SHIFT: usize = 8;
+const CHUNK: usize = 1 << CHUNK_SHIFT;
+
+/// The neighbour lists of CHUNK consecutive real particles, one after another in one array of
+/// exactly their size. A vector per particle would cost its 24-byte header and, filled by
+/// pushes, up to twice its length in spare capacity (in 3D about 200 bytes per particle, a
+/// sixth of the whole state); a single array for all particles could not take the partial
+/// rebuilds' new lengths without moving everything. A chunk is rewritten whole when any of its
+/// particles is dirty.
+#[derive(Debug, Default, Clone)]
+struct ListChunk {
+    /// End of each particle's list in `items` (its start is the previous end, or 0).
+    ends: Vec<u32>,
+    items: Vec<u32>,
+}
+
+impl ListChunk {
+    fn list(&self, k: usize) -> &[u32] {
+        let start = if k == 0 { 0 } else { self.ends[k - 1] as usize };
+        &self.items[start..self.ends[k] as usize]
+    }
 }
 
 /// What the lists need before they can be used at the current positions.
@@ -153,7 +180,23 @@ impl<const D: usize> Grid<D> {
 impl NeighborList {
     /// Total number of (i, j) entries.
     pub fn total(&self) -> usize {
-        self.lists.iter().map(Vec::len).sum()
+        self.chunks.iter().map(|c| c.items.len()).sum()
+    }
+
+    /// Number of lists (the real particles of the last build).
+    pub fn len(&self) -> usize {
+        self.n_lists
+    }
+
+    /// Whether there are no lists.
+    pub fn is_empty(&self) -> bool {
+        self.n_lists == 0
+    }
+
+    /// The neighbours of real particle `i`, in increasing index (the canonical order).
+    #[inline]
+    pub fn list(&self, i: usize) -> &[u32] {
+        self.chunks[i >> CHUNK_SHIFT].list(i & (CHUNK - 1))
     }
 
     /// The particles at `x` (with smoothing lengths `h`) in cell order: a locality-friendly
@@ -256,7 +299,7 @@ impl NeighborList {
                 *dirty = far2.sqrt() + grow >= skin;
             });
         let dirty_block = &self.dirty_block;
-        let n_real = self.lists.len();
+        let n_real = self.n_lists;
         let (starts, members) = (&self.block_start, &self.block_members);
         for (b, _) in dirty_block.iter().enumerate().filter(|(_, &d)| d) {
             for &i in &members[starts[b] as usize..starts[b + 1] as usize] {
@@ -279,14 +322,16 @@ impl NeighborList {
     /// after a full build, the dirty ones after a partial rebuild. Most particles meet no other
     /// body; passes over contacts can skip them without reading their lists.
     pub fn classify(&mut self, class: &[u32], only_dirty: bool) {
-        let n = self.lists.len();
+        let n = self.n_lists;
         self.mixed.resize(n, false);
-        let (lists, dirty) = (&self.lists, &self.dirty);
-        self.mixed
+        let mut mixed = std::mem::take(&mut self.mixed);
+        let (nl, dirty) = (&*self, &self.dirty);
+        mixed
             .par_iter_mut()
             .enumerate()
             .filter(|(i, _)| !only_dirty || dirty[*i])
-            .for_each(|(i, m)| *m = lists[i].iter().any(|&j| class[j as usize] != class[i]));
+            .for_each(|(i, m)| *m = nl.list(i).iter().any(|&j| class[j as usize] != class[i]));
+        self.mixed = mixed;
     }
 
     /// Rebuild the lists of the dirty particles from the current positions, with no skin
@@ -310,8 +355,9 @@ impl NeighborList {
             .par_extend(x.par_iter().flat_map_iter(|p| p.iter().copied()));
         self.h_built.clear();
         self.h_built.extend_from_slice(h);
-        self.lists.resize_with(n_real, Vec::new);
-        self.lists.truncate(n_real);
+        self.n_lists = n_real;
+        self.chunks
+            .resize_with(n_real.div_ceil(CHUNK), ListChunk::default);
         self.dirty.clear();
         self.dirty.resize(n_real, false);
         self.dirty_count = 0;
@@ -335,8 +381,8 @@ impl NeighborList {
             .dims
             .map(|d| (d as usize).div_ceil(BLOCK_CELLS as usize));
         let count = dims[0] * dims[1] * dims[2];
-        let block = |c: &[i64; 3]| {
-            let b = |k: usize| (c[k] / BLOCK_CELLS) as usize;
+        let block = |c: &[i32; 3]| {
+            let b = |k: usize| (c[k] as i64 / BLOCK_CELLS) as usize;
             (b(0) * dims[1] + b(1)) * dims[2] + b(2)
         };
         self.block_dims = dims;
@@ -382,14 +428,12 @@ impl NeighborList {
         let coords = &self.coords;
         let last = D - 1;
         let dirty = &self.dirty;
-        self.lists.par_iter_mut().enumerate().for_each(|(i, list)| {
-            if dirty_only && !dirty[i] {
-                return;
-            }
-            list.clear();
+        let n_lists = self.n_lists;
+        // The neighbours of real particle i, appended to `list`.
+        let search = |i: usize, list: &mut Vec<u32>| {
             let xi = x[i];
             let hi = h[i] + 0.5 * skin;
-            let c = coords[i];
+            let c = coords[i].map(i64::from);
             // Runs along the last axis for every offset of the other axes.
             let lo_last = (c[last] - REACH).max(0);
             let hi_last = (c[last] + REACH).min(grid.dims[last] - 1);
@@ -440,9 +484,34 @@ impl NeighborList {
                     }
                 }
             }
-            // Canonical order (see the module doc); cell runs are nearly sorted already.
-            list.sort_unstable();
-        });
+        };
+        self.chunks
+            .par_iter_mut()
+            .enumerate()
+            .for_each_init(Vec::new, |scratch, (ci, chunk)| {
+                let range = ci * CHUNK..((ci + 1) * CHUNK).min(n_lists);
+                if dirty_only && !dirty[range.clone()].contains(&true) {
+                    return;
+                }
+                scratch.clear();
+                let mut ends = Vec::with_capacity(range.len());
+                for i in range {
+                    let start = scratch.len();
+                    if dirty_only && !dirty[i] {
+                        scratch.extend_from_slice(chunk.list(ends.len()));
+                    } else {
+                        search(i, scratch);
+                        // Canonical order (see the module doc); cell runs are nearly sorted
+                        // already.
+                        scratch[start..].sort_unstable();
+                    }
+                    ends.push(scratch.len() as u32);
+                }
+                chunk.ends = ends;
+                chunk.items.clear();
+                chunk.items.reserve_exact(scratch.len());
+                chunk.items.extend_from_slice(scratch);
+            });
     }
 
     /// Sort the particles into cells; fills `sorted`, `cell_start` (and `cell_key` when sparse)
@@ -472,14 +541,15 @@ impl NeighborList {
             dense,
         };
         self.coords.clear();
-        self.coords.par_extend(x.par_iter().map(|p| grid.coords(p)));
+        self.coords
+            .par_extend(x.par_iter().map(|p| grid.coords(p).map(|c| c as i32)));
         self.sorted.clear();
         self.cell_start.clear();
         self.cell_key.clear();
         if dense {
             counting_sort(
                 &self.coords,
-                |c| grid.index(*c),
+                |c| grid.index(c.map(i64::from)),
                 total as usize,
                 &mut self.cell_start,
                 &mut self.sorted,
@@ -491,7 +561,7 @@ impl NeighborList {
             self.keyed.par_extend(
                 (0..n)
                     .into_par_iter()
-                    .map(|i| (grid.key(coords[i]), i as u32)),
+                    .map(|i| (grid.key(coords[i].map(i64::from)), i as u32)),
             );
             self.keyed.par_sort_unstable();
             for (k, &(key, i)) in self.keyed.iter().enumerate() {
@@ -555,11 +625,9 @@ mod tests {
         let mut nl = NeighborList::default();
         nl.build(x, h, n_real, 0.0);
         let expect = brute(x, h, n_real);
-        assert_eq!(nl.lists.len(), n_real);
-        for (i, (list, expect)) in nl.lists.iter().zip(&expect).enumerate() {
-            let mut got = list.clone();
-            got.sort();
-            assert_eq!(&got, expect, "particle {i}");
+        assert_eq!(nl.len(), n_real);
+        for (i, expect) in expect.iter().enumerate() {
+            assert_eq!(nl.list(i), expect, "particle {i}");
         }
     }
 
@@ -578,7 +646,7 @@ mod tests {
             let exact = brute(&x, &h, 400);
             for (i, e) in exact.iter().enumerate() {
                 assert!(
-                    e.iter().all(|j| nl.lists[i].contains(j)),
+                    e.iter().all(|j| nl.list(i).contains(j)),
                     "pair lost at move {moves}"
                 );
             }
@@ -644,7 +712,7 @@ mod tests {
             }
             for (i, e) in brute(&x, &h, n).iter().enumerate() {
                 assert!(
-                    e.iter().all(|j| nl.lists[i].contains(j)),
+                    e.iter().all(|j| nl.list(i).contains(j)),
                     "step {step}: pair of particle {i} lost"
                 );
             }

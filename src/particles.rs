@@ -97,6 +97,24 @@ pub struct Particles<const D: usize> {
     pub n_real: usize,
 }
 
+/// The real particles of a store (no ghosts), serialised exactly as a [`Particles`] holding only
+/// them would be: a checkpoint is written from the running state without copying it.
+pub struct RealParticles<'a, const D: usize>(pub &'a Particles<D>);
+
+impl<const D: usize> serde::Serialize for RealParticles<'_, D> {
+    fn serialize<S: serde::Serializer>(&self, ser: S) -> Result<S::Ok, S::Error> {
+        use serde::ser::SerializeStruct;
+        let (p, n) = (self.0, self.0.n_real);
+        let mut st = ser.serialize_struct("Particles", 22)?;
+        macro_rules! fields {
+            ($($f:ident),*) => { $(st.serialize_field(stringify!($f), &p.$f[..n])?;)* };
+        }
+        for_each_field!(fields);
+        st.serialize_field("n_real", &n)?;
+        st.end()
+    }
+}
+
 impl<const D: usize> Particles<D> {
     /// All particles, ghosts included.
     pub fn len(&self) -> usize {
@@ -145,6 +163,15 @@ impl<const D: usize> Particles<D> {
         self.n_real = self.x.len();
     }
 
+    /// Room for `additional` more particles in every field, exactly (pushing past an exact fit
+    /// would double the capacity of every array).
+    pub fn reserve_exact(&mut self, additional: usize) {
+        macro_rules! reserve {
+            ($($f:ident),*) => { $(self.$f.reserve_exact(additional);)* };
+        }
+        for_each_field!(reserve);
+    }
+
     /// Drop ghosts, keeping the real particles.
     pub fn truncate_to_real(&mut self) {
         let n = self.n_real;
@@ -183,7 +210,9 @@ impl<const D: usize> Particles<D> {
     /// Reorder real particles by `order` (new position k holds old particle order[k]).
     pub fn permute(&mut self, order: &[usize]) {
         fn apply<T: Copy>(v: &mut Vec<T>, order: &[usize]) {
-            let old = std::mem::take(v);
+            // The capacity stays, room for the ghosts included.
+            // The capacity stays, room for the ghosts included.
+            let old = std::mem::replace(v, Vec::with_capacity(v.capacity()));
             v.extend(order.iter().map(|&k| old[k]));
         }
         self.truncate_to_real();

@@ -245,7 +245,7 @@ pub fn states<const D: usize, K: Kernel>(
         if !nl.mixed.get(i).copied().unwrap_or(true) {
             return ColourState::default();
         }
-        let list = &nl.lists[i];
+        let list = nl.list(i);
         let (mut c, mut g) = (0.0, 0.0);
         let mut own = [0.0; 3];
         let mut near = false;

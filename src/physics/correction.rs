@@ -107,7 +107,7 @@ pub(crate) fn corrections_on<const D: usize, K: Kernel>(
         // Particles with no neighbour of another body (see `NeighborList::classify`) need no
         // check of the pair's bodies.
         let mixed = nl.mixed.get(i).copied().unwrap_or(true);
-        let list = &nl.lists[i];
+        let list = nl.list(i);
         #[cfg(target_arch = "x86_64")]
         if wide {
             // SAFETY: the CPU has AVX2 (asserted above).
@@ -272,7 +272,7 @@ pub fn shepard<const D: usize, K: Kernel>(
         .into_par_iter()
         .map(|i| {
             let mut s = p.volume(i) * kernel.w::<D>(0.0, p.h[i]);
-            for &j in &nl.lists[i] {
+            for &j in nl.list(i) {
                 let j = j as usize;
                 if !joined(p.body[i], p.body[j]) {
                     continue;

@@ -367,6 +367,8 @@ fn compute_rates_on<const D: usize, K: Kernel>(
         .iter()
         .any(|m| m.artificial_stress.is_some());
     out.gather.clear();
+    // Room for the padding too: pushed past an exact fit, the vector would double.
+    out.gather.reserve_exact(all + 1);
     out.gather.par_extend((0..all).into_par_iter().map(|i| {
         let sr2 = p.stress(i) / (p.rho[i] * p.rho[i]);
         Gather {
@@ -401,6 +403,8 @@ fn compute_rates_on<const D: usize, K: Kernel>(
             all,
             "a correction for every particle, ghosts included"
         );
+        out.corr.reserve_exact(all + 1);
+        out.sb.reserve_exact(all + 1);
         out.corr
             .par_extend((0..all).into_par_iter().map(|i| matrix(&corr[i])));
         out.corr.push(matrix(&Tensor::<D>::identity()));
@@ -414,6 +418,7 @@ fn compute_rates_on<const D: usize, K: Kernel>(
     out.art.clear();
     if any_art {
         // In CN-SPH the artificial stress's side of the pair force is R B, as the stress's.
+        out.art.reserve_exact(all + 1);
         out.art.par_extend((0..all).into_par_iter().map(|i| {
             let r = match model.material_of(p.body[i]).artificial_stress {
                 Some(eps) => artificial_stress::tensor(&p.stress(i), p.rho[i], eps),
@@ -445,7 +450,7 @@ fn compute_rates_on<const D: usize, K: Kernel>(
         ($art:literal, $cn:literal) => {
             out.particles
                 .par_extend((0..p.n_real).into_par_iter().map(|i| {
-                    let list = &nl.lists[i];
+                    let list = nl.list(i);
                     #[cfg(target_arch = "x86_64")]
                     if wide {
                         // SAFETY: the CPU has AVX2 (asserted above).

@@ -72,6 +72,7 @@ pub fn build<const D: usize>(case: &Case) -> Result<(Particles<D>, Model<D>)> {
         if let crate::case::Shape::Mesh(mesh) = &body.shape {
             check_closed(case, b, mesh, &points)?;
         }
+        p.reserve_exact(points.len());
         for x in points {
             p.push(x, v, mass, mat.rho0, h0, b as u32);
             let i = p.len() - 1;
@@ -252,7 +253,7 @@ fn check_overlap<const D: usize>(case: &Case, p: &Particles<D>) -> Result<()> {
     let mut nl = NeighborList::default();
     nl.build(&p.x, &h, p.len(), 0.0);
     for i in 0..p.len() {
-        for &j in &nl.lists[i] {
+        for &j in nl.list(i) {
             let j = j as usize;
             let (bi, bj) = (p.body[i] as usize, p.body[j] as usize);
             if bi < bj {
