@@ -19,11 +19,12 @@
 use crate::case::{Case, ColorBy, PictureSpec};
 use crate::error::{Error, Result};
 use crate::output::atomic;
-use crate::output::checkpoint::{Checkpoint, RunState, Tally};
+use crate::output::checkpoint::{Checkpoint, CheckpointRef, RunState, Tally};
 use crate::output::history::{History, HistoryWriter};
 use crate::output::picture::{self, SectionFrame};
 use crate::output::summary::Summary;
 use crate::output::vtk::{self, PvdWriter};
+use crate::particles::RealParticles;
 use crate::simulation::{Diagnostics, Simulation};
 use std::path::{Path, PathBuf};
 use std::sync::atomic::{AtomicBool, Ordering};
@@ -145,18 +146,18 @@ impl<const D: usize> Run<'_, D> {
     }
 
     fn checkpoint(&mut self) -> Result<()> {
-        let (particles, sim, searches) = self.sim.checkpoint_state();
         let mut run = self.state.clone();
         run.snapshots = self.pvd.entries().to_vec();
         run.history_len = self.history.len();
         run.wall_seconds += self.start.elapsed().as_secs_f64();
-        let c = Checkpoint::<D> {
-            case: self.case.name.clone(),
-            physics: self.case.physics_fingerprint(),
-            particles,
-            sim,
-            searches,
-            run,
+        let physics = self.case.physics_fingerprint();
+        let c = CheckpointRef::<D> {
+            case: &self.case.name,
+            physics: &physics,
+            particles: RealParticles(&self.sim.particles),
+            sim: &self.sim.state,
+            searches: &self.sim.stats,
+            run: &run,
         };
         c.write(&self.out("checkpoint.bin"))
     }

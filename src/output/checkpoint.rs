@@ -9,9 +9,10 @@
 use crate::case::Case;
 use crate::error::{Error, Result};
 use crate::output::picture::SectionFrame;
-use crate::particles::Particles;
+use crate::particles::{Particles, RealParticles};
 use crate::simulation::{Diagnostics, SearchStats, SimState};
 use serde::{Deserialize, Serialize};
+use std::io::{Seek, SeekFrom, Write};
 use std::path::Path;
 
 /// Format version, checked on reading.
@@ -69,22 +70,108 @@ pub struct Checkpoint<const D: usize> {
 const MAGIC: &[u8; 8] = b"STRIKECP";
 const HEADER: usize = 8 + 4 + 4 + 8;
 
-impl<const D: usize> Checkpoint<D> {
-    /// Write atomically (see [`crate::output::atomic`]), so a crash never leaves half a
-    /// checkpoint, with a checksum so that a damaged one is refused.
-    pub fn write(&self, path: &Path) -> Result<()> {
-        let payload = postcard::to_stdvec(self).map_err(|e| {
-            Error::Invalid(format!("{}: cannot encode checkpoint: {e}", path.display()))
+/// What a checkpoint holds, borrowed from the running simulation, serialised exactly as a
+/// [`Checkpoint`] is read back. Writing it copies nothing: the payload streams to the file
+/// (a copy of the particles and of the encoded payload would each cost about the state's 400
+/// bytes a particle in 3D, at the moment a large run is closest to its memory limit).
+#[derive(Serialize)]
+pub struct CheckpointRef<'a, const D: usize> {
+    pub case: &'a str,
+    pub physics: &'a [(String, String)],
+    pub particles: RealParticles<'a, D>,
+    pub sim: &'a SimState,
+    pub searches: &'a SearchStats,
+    pub run: &'a RunState,
+}
+
+/// A writer that passes bytes on while it sums their CRC-32 and counts them, and keeps the
+/// first I/O error (postcard would not say what the disk said).
+struct Summed<W: Write> {
+    inner: W,
+    crc: crc32fast::Hasher,
+    len: u64,
+    error: Option<std::io::Error>,
+}
+
+impl<W: Write> Write for Summed<W> {
+    fn write(&mut self, buf: &[u8]) -> std::io::Result<usize> {
+        let n = self.inner.write(buf).inspect_err(|e| {
+            self.error
+                .get_or_insert_with(|| std::io::Error::new(e.kind(), e.to_string()));
         })?;
-        let mut bytes = Vec::with_capacity(HEADER + payload.len());
-        bytes.extend_from_slice(MAGIC);
-        bytes.extend_from_slice(&FORMAT.to_le_bytes());
-        bytes.extend_from_slice(&crc32fast::hash(&payload).to_le_bytes());
-        bytes.extend_from_slice(&(payload.len() as u64).to_le_bytes());
-        bytes.extend_from_slice(&payload);
-        crate::output::atomic::write(path, &bytes)
+        self.crc.update(&buf[..n]);
+        self.len += n as u64;
+        Ok(n)
     }
 
+    fn flush(&mut self) -> std::io::Result<()> {
+        self.inner.flush()
+    }
+}
+
+/// Passes postcard's bytes on to a [`Summed`] writer, 64 at a time (an error is kept there).
+struct Sink<'a, W: Write>(&'a mut Summed<W>);
+
+impl<W: Write> Extend<u8> for Sink<'_, W> {
+    fn extend<I: IntoIterator<Item = u8>>(&mut self, bytes: I) {
+        let mut buf = [0u8; 64];
+        let mut n = 0;
+        for b in bytes {
+            buf[n] = b;
+            n += 1;
+            if n == buf.len() {
+                let _ = self.0.write_all(&buf);
+                n = 0;
+            }
+        }
+        let _ = self.0.write_all(&buf[..n]);
+    }
+}
+
+impl<const D: usize> CheckpointRef<'_, D> {
+    /// Write atomically (see [`crate::output::atomic`]), so a crash never leaves half a
+    /// checkpoint, with a checksum so that a damaged one is refused. The header's checksum and
+    /// length are filled in once the payload is out.
+    pub fn write(&self, path: &Path) -> Result<()> {
+        crate::output::atomic::write_with(path, |tmp| {
+            let io = |e: std::io::Error| Error::io(path, e);
+            let mut file = std::fs::File::create(tmp).map_err(io)?;
+            file.write_all(&[0; HEADER]).map_err(io)?;
+            let (crc, len) = {
+                let mut out = Summed {
+                    inner: std::io::BufWriter::with_capacity(1 << 20, &mut file),
+                    crc: crc32fast::Hasher::new(),
+                    len: 0,
+                    error: None,
+                };
+                // Through `Extend`, not `postcard::to_io`: with `to_io` in the binary, LLVM
+                // stopped vectorising the AVX2 rate pass (half its speed, as `strike bench`
+                // showed), for no reason we could find.
+                let encoded = postcard::to_extend(self, Sink(&mut out)).map(drop);
+                if let Some(e) = out.error.take() {
+                    return Err(io(e));
+                }
+                if let Err(e) = encoded {
+                    return Err(Error::Invalid(format!(
+                        "{}: cannot encode checkpoint: {e}",
+                        path.display()
+                    )));
+                }
+                out.flush().map_err(io)?;
+                (out.crc.clone().finalize(), out.len)
+            };
+            let mut header = Vec::with_capacity(HEADER);
+            header.extend_from_slice(MAGIC);
+            header.extend_from_slice(&FORMAT.to_le_bytes());
+            header.extend_from_slice(&crc.to_le_bytes());
+            header.extend_from_slice(&len.to_le_bytes());
+            file.seek(SeekFrom::Start(0)).map_err(io)?;
+            file.write_all(&header).map_err(io)
+        })
+    }
+}
+
+impl<const D: usize> Checkpoint<D> {
     /// Read a checkpoint written for `case` in `D` dimensions: a file that is not a checkpoint,
     /// is damaged (checksum), is of another case or dimension, or was written with another
     /// physical set-up is refused with what is wrong.
