@@ -25,6 +25,8 @@ pub struct BenchCase {
     pub peak_rss_bytes: u64,
     /// Growth of the peak resident memory over the process before the case, per particle.
     pub bytes_per_particle: f64,
+    /// What `strike check` estimates per particle for the same deck, for comparison.
+    pub estimated_bytes_per_particle: f64,
 }
 
 #[derive(Debug, Clone, Serialize)]
@@ -176,11 +178,16 @@ fn measure_dim<const D: usize>(
         mean_neighbors: interactions as f64 / (n as u64 * steps) as f64,
         peak_rss_bytes: peak,
         bytes_per_particle: peak.saturating_sub(base_rss) as f64 / n as f64,
+        estimated_bytes_per_particle: crate::particles::estimated_bytes_per_particle(
+            D,
+            case.simulation.formulation == crate::case::Formulation::Corrected,
+        ) as f64,
     })
 }
 
 /// The groups of cases `run_all` can be limited to.
-pub const GROUPS: [&str; 5] = [
+pub const GROUPS: [&str; 6] = [
+    "large",
     "scaling",
     "cubes_3d",
     "cubes_3d_cn",
@@ -196,7 +203,13 @@ fn cubes_3d_cn() -> String {
     )
 }
 
-/// The standard benchmark. First the scaling series on all cores — cubes of 100³ (the
+/// Edge of the large cube in particles: 216³ = 10 077 696, the ten million particles of issue
+/// 14 (about 12 GB).
+pub const LARGE_CUBE: usize = 216;
+
+/// The standard benchmark. First the large cube (10⁷ particles, 2 steps; skipped with a warning
+/// where the machine has too little memory for it, an error when asked for by name), then the
+/// scaling series on all cores — cubes of 100³ (the
 /// million-particle memory figure, measured first while the process is fresh), 50³ and 25³
 /// particles — then every fixed case on 1 thread and on all cores. `quick` runs fewer steps and
 /// smaller cubes (a smoke test). `only` limits the run to some of [`GROUPS`] (all when empty).
@@ -224,6 +237,29 @@ pub fn run_all(
     } else {
         &[(100, 3), (50, 10), (25, 40)]
     };
+    if wanted("large") && !quick {
+        let deck = cube_deck(LARGE_CUBE);
+        let n = LARGE_CUBE.pow(3) as f64;
+        let need = n * crate::particles::estimated_bytes_per_particle(3, false) as f64;
+        match crate::machine::available_memory() {
+            Some(have) if have < 1.1 * need => {
+                let why = format!(
+                    "the large benchmark case ({n:.3e} particles) needs about {:.1} GB; {:.1} GB are available",
+                    need / 1e9,
+                    have / 1e9
+                );
+                if !only.is_empty() {
+                    return Err(Error::Invalid(why));
+                }
+                tracing::warn!("skipped: {why}");
+            }
+            _ => {
+                let c = measure(&deck, "bench:cube", all, 1, 2)?;
+                report(&c);
+                cases.push(c);
+            }
+        }
+    }
     for &(n, steps) in sizes.iter().filter(|_| wanted("scaling")) {
         let c = measure(&cube_deck(n), "bench:cube", all, 1, steps)?;
         report(&c);
@@ -254,7 +290,7 @@ pub fn run_all(
 /// One human-readable line.
 pub fn line(c: &BenchCase) -> String {
     format!(
-        "{:<14} {}D {:>8} particles {:>2} threads {:>4} steps {:>8.2} s  {:.3e} particle-steps/s  {:.3e} interactions/s/core  {:.1} neighbours  peak {:.0} MB  {:.0} B/particle",
+        "{:<14} {}D {:>8} particles {:>2} threads {:>4} steps {:>8.2} s  {:.3e} particle-steps/s  {:.3e} interactions/s/core  {:.1} neighbours  peak {:.0} MB  {:.0} B/particle (estimate {:.0})",
         c.name,
         c.dimension,
         c.particles,
@@ -265,6 +301,7 @@ pub fn line(c: &BenchCase) -> String {
         c.interactions_per_second_per_core,
         c.mean_neighbors,
         c.peak_rss_bytes as f64 / 1e6,
-        c.bytes_per_particle
+        c.bytes_per_particle,
+        c.estimated_bytes_per_particle
     )
 }

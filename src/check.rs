@@ -118,7 +118,8 @@ pub fn check(case: &Case) -> Result<String> {
 /// The lines every check prints after the bodies: steps, memory, run time, outputs, warnings.
 fn plan_lines(case: &Case, n: f64, dt: f64, w: &mut String, warnings: &mut Vec<String>) {
     let steps = (case.simulation.end_time / dt).ceil();
-    let bytes = n * estimated_bytes_per_particle(case.dimension) as f64;
+    let corrected = case.simulation.formulation == crate::case::Formulation::Corrected;
+    let bytes = n * estimated_bytes_per_particle(case.dimension, corrected) as f64;
     let cores = crate::machine::cores() as f64;
     let per_core = match case.simulation.formulation {
         crate::case::Formulation::Conventional => PLANNING_PARTICLE_STEPS_PER_CORE,

@@ -53,7 +53,7 @@ enum Command {
         /// Where to write the JSON report.
         #[arg(long, default_value = "bench.json")]
         json: PathBuf,
-        /// Run only these cases (repeatable): scaling, cubes_3d, cubes_3d_cn, sphere_plate, plates_2d.
+        /// Run only these cases (repeatable): large, scaling, cubes_3d, cubes_3d_cn, sphere_plate, plates_2d.
         #[arg(long = "case", value_name = "NAME")]
         cases: Vec<String>,
     },

@@ -248,14 +248,17 @@ pub fn from3<const D: usize>(a: [f64; 3]) -> Vector<D> {
 }
 
 /// Estimated memory per particle in bytes, used by `strike check` and the deck's memory check:
-/// the state (≈ 300 B in 3D), the rate pass's neighbour records and results (≈ 390 B), the
-/// neighbour list with its skin (≈ 57 × 4 B + 24 B) and the search buffers (≈ 160 B), with a
-/// margin for ghosts and the allocator. `strike bench` measured 1.3 KB per particle in 3D at a
-/// million particles.
-pub fn estimated_bytes_per_particle(dimension: usize) -> usize {
-    if dimension == 2 {
-        800
-    } else {
-        1400
+/// what `strike bench` measured (peak resident memory over the steps, set-up included, per
+/// particle; 2026-11-24) plus about 4 % for ghosts and the allocator. In 3D: the state
+/// (≈ 390 B), the neighbour list with its skin (≈ 70 × 4 B), the rate pass's neighbour records
+/// and results (2 × 176 B) and the search buffers (≈ 110 B): 1151 B at 10⁶ particles and 1154 B
+/// at 10⁷; CN-SPH adds B, (σ/ρ²)B and the correction pass's records, 1511 B at 10⁶. In 2D
+/// 771 B and 963 B (CN-SPH) at 5·10⁵.
+pub fn estimated_bytes_per_particle(dimension: usize, corrected: bool) -> usize {
+    match (dimension, corrected) {
+        (2, false) => 800,
+        (2, true) => 1000,
+        (_, false) => 1200,
+        (_, true) => 1580,
     }
 }

@@ -287,6 +287,7 @@ fn bench_writes_its_report() {
         "mean_neighbors",
         "peak_rss_bytes",
         "bytes_per_particle",
+        "estimated_bytes_per_particle",
     ];
     for c in cases {
         for k in keys {
@@ -313,6 +314,32 @@ fn bench_writes_its_report() {
             "{name}: {threads:?}"
         );
     }
+}
+
+/// The memory that `strike check` and the deck's memory check estimate per particle is within
+/// 10 % of what `strike bench` measures on a cube of a million particles (measured first, in a
+/// fresh process, so that the growth of the peak resident memory is the case's own).
+#[test]
+fn check_estimates_the_memory_bench_measures() {
+    let dir = out_dir("bench_memory");
+    std::fs::create_dir_all(&dir).unwrap();
+    let json = dir.join("bench.json");
+    let out = strike(&["bench", "--case", "scaling", "--json", json.to_str().unwrap()]);
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let v: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(&json).unwrap()).unwrap();
+    let cube = &v["cases"][0];
+    assert_eq!(cube["particles"], 1_000_000);
+    let measured = cube["bytes_per_particle"].as_f64().unwrap();
+    let estimate = cube["estimated_bytes_per_particle"].as_f64().unwrap();
+    assert!(
+        (estimate - measured).abs() <= 0.1 * measured,
+        "check estimates {estimate} B a particle, bench measured {measured}"
+    );
 }
 
 fn num_cpus() -> usize {

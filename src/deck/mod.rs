@@ -699,7 +699,8 @@ impl Ctx<'_> {
                 motion,
             });
         }
-        self.check_memory(raw_bodies, &bodies, dimension, memory)?;
+        let corrected = simulation.formulation == Formulation::Corrected;
+        self.check_memory(raw_bodies, &bodies, (dimension, corrected), memory)?;
 
         let interactions = self.interactions(deck.interaction.as_deref(), &bodies)?;
         let symmetry = self.symmetry(deck.symmetry.as_deref(), dimension)?;
@@ -1186,7 +1187,7 @@ impl Ctx<'_> {
         &self,
         raw_bodies: &[raw::Located<raw::Body>],
         bodies: &[BodySpec],
-        dim: usize,
+        (dim, corrected): (usize, bool),
         memory: Option<f64>,
     ) -> Result<()> {
         let counts: Vec<f64> = bodies
@@ -1194,7 +1195,7 @@ impl Ctx<'_> {
             .map(|b| estimate_particles(&b.shape, b.spacing, dim))
             .collect();
         let total: f64 = counts.iter().sum();
-        let per = crate::particles::estimated_bytes_per_particle(dim) as f64;
+        let per = crate::particles::estimated_bytes_per_particle(dim, corrected) as f64;
         // The particle store numbers particles with u32.
         let limit_count = u32::MAX as f64;
         let limit_memory = memory.map_or(f64::INFINITY, |m| m / per);
