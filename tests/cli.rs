@@ -258,22 +258,28 @@ type = "welded"
     assert_eq!((s2.status, s2.reason), (s.status, s.reason));
 }
 
-/// `strike bench --quick` measures every built-in case on 1 thread and all cores and writes
-/// bench.json with the documented keys; the neighbour counts are those of the lattices
-/// (h = 1.2 Δp: about 50 in 3D, 20 in 2D, fewer at free surfaces).
-#[test]
-fn bench_writes_its_report() {
-    let dir = out_dir("bench");
+/// `strike bench` with `args`, its report read back (`name`: the output directory).
+fn bench_json(name: &str, args: &[&str]) -> serde_json::Value {
+    let dir = out_dir(name);
     std::fs::create_dir_all(&dir).unwrap();
     let json = dir.join("bench.json");
-    let out = strike(&["bench", "--quick", "--json", json.to_str().unwrap()]);
+    let mut all = vec!["bench", "--json", json.to_str().unwrap()];
+    all.extend_from_slice(args);
+    let out = strike(&all);
     assert!(
         out.status.success(),
         "{}",
         String::from_utf8_lossy(&out.stderr)
     );
-    let v: serde_json::Value =
-        serde_json::from_str(&std::fs::read_to_string(&json).unwrap()).unwrap();
+    serde_json::from_str(&std::fs::read_to_string(&json).unwrap()).unwrap()
+}
+
+/// `strike bench --quick` measures every built-in case on 1 thread and all cores and writes
+/// bench.json with the documented keys; the neighbour counts are those of the lattices
+/// (h = 1.2 Δp: about 50 in 3D, 20 in 2D, fewer at free surfaces).
+#[test]
+fn bench_writes_its_report() {
+    let v = bench_json("bench", &["--quick"]);
     let cases = v["cases"].as_array().unwrap();
     let keys = [
         "name",
@@ -321,17 +327,7 @@ fn bench_writes_its_report() {
 /// fresh process, so that the growth of the peak resident memory is the case's own).
 #[test]
 fn check_estimates_the_memory_bench_measures() {
-    let dir = out_dir("bench_memory");
-    std::fs::create_dir_all(&dir).unwrap();
-    let json = dir.join("bench.json");
-    let out = strike(&["bench", "--case", "scaling", "--json", json.to_str().unwrap()]);
-    assert!(
-        out.status.success(),
-        "{}",
-        String::from_utf8_lossy(&out.stderr)
-    );
-    let v: serde_json::Value =
-        serde_json::from_str(&std::fs::read_to_string(&json).unwrap()).unwrap();
+    let v = bench_json("bench_memory", &["--case", "scaling"]);
     let cube = &v["cases"][0];
     assert_eq!(cube["particles"], 1_000_000);
     let measured = cube["bytes_per_particle"].as_f64().unwrap();
