@@ -56,7 +56,8 @@ const KEY_BITS: u32 = 21;
 const KEY_MAX: i64 = (1 << KEY_BITS) - 1;
 
 /// Neighbour lists of the real particles, with the buffers of the search kept between steps so
-/// that rebuilding allocates nothing once the run has settled.
+/// that rebuilding allocates little once the run has settled (a chunk's array grows only past
+/// its largest size so far; each parallel job of a build has its own scratch arrays).
 #[derive(Debug, Default, Clone)]
 pub struct NeighborList {
     /// The lists of the real particles, CHUNK particles to a chunk (see [`ListChunk`]).
@@ -485,16 +486,15 @@ impl NeighborList {
                 }
             }
         };
-        self.chunks
-            .par_iter_mut()
-            .enumerate()
-            .for_each_init(Vec::new, |scratch, (ci, chunk)| {
+        self.chunks.par_iter_mut().enumerate().for_each_init(
+            || (Vec::new(), Vec::new()),
+            |(scratch, ends), (ci, chunk)| {
                 let range = ci * CHUNK..((ci + 1) * CHUNK).min(n_lists);
                 if dirty_only && !dirty[range.clone()].contains(&true) {
                     return;
                 }
                 scratch.clear();
-                let mut ends = Vec::with_capacity(range.len());
+                ends.clear();
                 for i in range {
                     let start = scratch.len();
                     if dirty_only && !dirty[i] {
@@ -507,11 +507,13 @@ impl NeighborList {
                     }
                     ends.push(scratch.len() as u32);
                 }
-                chunk.ends = ends;
+                chunk.ends.clear();
+                chunk.ends.extend_from_slice(ends);
                 chunk.items.clear();
                 chunk.items.reserve_exact(scratch.len());
                 chunk.items.extend_from_slice(scratch);
-            });
+            },
+        );
     }
 
     /// Sort the particles into cells; fills `sorted`, `cell_start` (and `cell_key` when sparse)

@@ -105,6 +105,7 @@ impl<const D: usize> serde::Serialize for RealParticles<'_, D> {
     fn serialize<S: serde::Serializer>(&self, ser: S) -> Result<S::Ok, S::Error> {
         use serde::ser::SerializeStruct;
         let (p, n) = (self.0, self.0.n_real);
+        // The fields of `Particles` in their order, then n_real.
         let mut st = ser.serialize_struct("Particles", 22)?;
         macro_rules! fields {
             ($($f:ident),*) => { $(st.serialize_field(stringify!($f), &p.$f[..n])?;)* };
@@ -210,7 +211,6 @@ impl<const D: usize> Particles<D> {
     /// Reorder real particles by `order` (new position k holds old particle order[k]).
     pub fn permute(&mut self, order: &[usize]) {
         fn apply<T: Copy>(v: &mut Vec<T>, order: &[usize]) {
-            // The capacity stays, room for the ghosts included.
             // The capacity stays, room for the ghosts included.
             let old = std::mem::replace(v, Vec::with_capacity(v.capacity()));
             v.extend(order.iter().map(|&k| old[k]));

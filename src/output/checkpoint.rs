@@ -71,7 +71,8 @@ const MAGIC: &[u8; 8] = b"STRIKECP";
 const HEADER: usize = 8 + 4 + 4 + 8;
 
 /// What a checkpoint holds, borrowed from the running simulation, serialised exactly as a
-/// [`Checkpoint`] is read back. Writing it copies nothing: the payload streams to the file
+/// [`Checkpoint`] is read back (the same fields in the same order; the resume tests read what
+/// it writes). Writing it copies nothing: the payload streams to the file
 /// (a copy of the particles and of the encoded payload would each cost about the state's 400
 /// bytes a particle in 3D, at the moment a large run is closest to its memory limit).
 #[derive(Serialize)]
