@@ -209,9 +209,8 @@ pub const LARGE_CUBE: usize = 216;
 
 /// The standard benchmark. First the large cube (10⁷ particles, 2 steps; skipped with a warning
 /// where the machine has too little memory for it, an error when asked for by name), then the
-/// scaling series on all cores — cubes of 100³ (the
-/// million-particle memory figure, measured first while the process is fresh), 50³ and 25³
-/// particles — then every fixed case on 1 thread and on all cores. `quick` runs fewer steps and
+/// scaling series on all cores — cubes of 100³ (the million-particle memory figure), 50³ and
+/// 25³ particles — then every fixed case on 1 thread and on all cores. `quick` runs fewer steps and
 /// smaller cubes (a smoke test). `only` limits the run to some of [`GROUPS`] (all when empty).
 /// `report` is told of each case as it is measured.
 pub fn run_all(
