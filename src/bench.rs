@@ -1,9 +1,12 @@
 //! `strike bench`: fixed built-in cases run for a fixed number of steps after a warm-up, on one
 //! thread and on all cores, reporting particle-steps/s, particle-neighbour interactions/s per
-//! core, mean neighbours and peak memory per particle. Also written to `bench.json`.
+//! core, mean neighbours and peak memory per particle. Also written to `bench.json`. Under
+//! `mpirun` (the `mpi` feature) each case runs on all the ranks with one thread each, and the
+//! share of the time spent in the exchanges between ranks is reported.
 
 use crate::deck;
 use crate::error::{Error, Result};
+use crate::ranks::Ranks;
 use crate::simulation::Simulation;
 use serde::Serialize;
 use std::time::Instant;
@@ -14,12 +17,17 @@ pub struct BenchCase {
     pub name: String,
     pub dimension: usize,
     pub particles: usize,
+    /// Threads of each rank, and MPI ranks (1 without MPI).
     pub threads: usize,
+    pub ranks: usize,
     pub steps: u64,
     pub wall_seconds: f64,
     pub particle_steps_per_second: f64,
-    /// Each particle's neighbours counted once per step (the one pass of a step).
+    /// Each particle's neighbours counted once per step (the one pass of a step); the cores
+    /// are threads × ranks.
     pub interactions_per_second_per_core: f64,
+    /// Share of the wall time the root rank spent in the exchanges between ranks (0 on one).
+    pub exchange_share: f64,
     pub mean_neighbors: f64,
     /// Peak resident memory while the case ran (set up + steps), whole process (bytes).
     pub peak_rss_bytes: u64,
@@ -126,11 +134,12 @@ fn reset_peak() {
     let _ = std::fs::write("/proc/self/clear_refs", "5");
 }
 
-/// Measure one deck at one thread count: `warmup` steps, then `steps` timed steps.
+/// Measure one deck at one thread count (of each of `ranks`): `warmup` steps, then `steps`
+/// timed steps.
 pub fn measure(
     text: &str,
     label: &str,
-    threads: usize,
+    (threads, ranks): (usize, Ranks),
     warmup: u64,
     steps: u64,
 ) -> Result<BenchCase> {
@@ -142,22 +151,24 @@ pub fn measure(
     reset_peak();
     let (_, base) = rss();
     pool.install(|| match case.dimension {
-        2 => measure_dim::<2>(&case, threads, warmup, steps, base),
-        _ => measure_dim::<3>(&case, threads, warmup, steps, base),
+        2 => measure_dim::<2>(&case, (threads, ranks), warmup, steps, base),
+        _ => measure_dim::<3>(&case, (threads, ranks), warmup, steps, base),
     })
 }
 
 fn measure_dim<const D: usize>(
     case: &crate::case::Case,
-    threads: usize,
+    (threads, ranks): (usize, Ranks),
     warmup: u64,
     steps: u64,
     base_rss: u64,
 ) -> Result<BenchCase> {
     let mut sim = Simulation::<D>::new(case)?;
+    sim.distribute(ranks);
     for _ in 0..warmup {
         sim.step(f64::INFINITY)?;
     }
+    let exchanged = sim.exchange_seconds();
     let start = Instant::now();
     let mut interactions = 0u64;
     for _ in 0..steps {
@@ -171,10 +182,14 @@ fn measure_dim<const D: usize>(
         dimension: D,
         particles: n,
         threads,
+        ranks: ranks.size(),
         steps,
         wall_seconds: wall,
         particle_steps_per_second: (n as u64 * steps) as f64 / wall,
-        interactions_per_second_per_core: interactions as f64 / wall / threads as f64,
+        interactions_per_second_per_core: interactions as f64
+            / wall
+            / (threads * ranks.size()) as f64,
+        exchange_share: (sim.exchange_seconds() - exchanged) / wall,
         mean_neighbors: interactions as f64 / (n as u64 * steps) as f64,
         peak_rss_bytes: peak,
         bytes_per_particle: peak.saturating_sub(base_rss) as f64 / n as f64,
@@ -216,6 +231,7 @@ pub const LARGE_CUBE: usize = 216;
 pub fn run_all(
     quick: bool,
     only: &[String],
+    ranks: Ranks,
     mut report: impl FnMut(&BenchCase),
 ) -> Result<BenchReport> {
     if let Some(bad) = only.iter().find(|g| !GROUPS.contains(&g.as_str())) {
@@ -225,7 +241,12 @@ pub fn run_all(
         )));
     }
     let wanted = |g: &str| only.is_empty() || only.iter().any(|o| o == g);
-    let all = std::thread::available_parallelism().map_or(1, |n| n.get());
+    // Under MPI, one thread a rank (the ranks take the cores).
+    let all = if ranks.size() > 1 {
+        1
+    } else {
+        std::thread::available_parallelism().map_or(1, |n| n.get())
+    };
     let mut threads = vec![1];
     if all > 1 {
         threads.push(all);
@@ -236,7 +257,8 @@ pub fn run_all(
     } else {
         &[(100, 3), (50, 10), (25, 40)]
     };
-    if wanted("large") && !quick {
+    // Each rank holds the whole state (see `ranks`): the large case is for one process.
+    if wanted("large") && !quick && ranks.size() == 1 {
         let deck = cube_deck(LARGE_CUBE);
         let n = LARGE_CUBE.pow(3) as f64;
         let need = n * crate::particles::estimated_bytes_per_particle(3, false) as f64;
@@ -253,14 +275,14 @@ pub fn run_all(
                 tracing::warn!("skipped: {why}");
             }
             _ => {
-                let c = measure(&deck, "bench:cube", all, 1, 2)?;
+                let c = measure(&deck, "bench:cube", (all, ranks), 1, 2)?;
                 report(&c);
                 cases.push(c);
             }
         }
     }
     for &(n, steps) in sizes.iter().filter(|_| wanted("scaling")) {
-        let c = measure(&cube_deck(n), "bench:cube", all, 1, steps)?;
+        let c = measure(&cube_deck(n), "bench:cube", (all, ranks), 1, steps)?;
         report(&c);
         cases.push(c);
     }
@@ -278,7 +300,7 @@ pub fn run_all(
     ];
     for (_, text, label, s) in decks.into_iter().filter(|d| wanted(d.0)) {
         for &t in &threads {
-            let c = measure(&text, label, t, warm, s.max(2))?;
+            let c = measure(&text, label, (t, ranks), warm, s.max(2))?;
             report(&c);
             cases.push(c);
         }
@@ -289,11 +311,16 @@ pub fn run_all(
 /// One human-readable line.
 pub fn line(c: &BenchCase) -> String {
     format!(
-        "{:<14} {}D {:>8} particles {:>2} threads {:>4} steps {:>8.2} s  {:.3e} particle-steps/s  {:.3e} interactions/s/core  {:.1} neighbours  peak {:.0} MB  {:.0} B/particle (estimate {:.0})",
+        "{:<14} {}D {:>8} particles {:>2} threads{} {:>4} steps {:>8.2} s  {:.3e} particle-steps/s  {:.3e} interactions/s/core  {:.1} neighbours  peak {:.0} MB  {:.0} B/particle (estimate {:.0})",
         c.name,
         c.dimension,
         c.particles,
         c.threads,
+        if c.ranks > 1 {
+            format!(" × {} ranks ({:.1} % exchanging)", c.ranks, 100.0 * c.exchange_share)
+        } else {
+            String::new()
+        },
         c.steps,
         c.wall_seconds,
         c.particle_steps_per_second,

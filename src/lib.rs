@@ -25,6 +25,7 @@ pub mod neighbors;
 pub mod output;
 pub mod particles;
 pub mod physics;
+pub mod ranks;
 pub mod run;
 pub mod setup;
 pub mod simulation;

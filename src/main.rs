@@ -6,7 +6,7 @@ use std::io::IsTerminal;
 use std::path::{Path, PathBuf};
 use std::sync::atomic::{AtomicBool, Ordering};
 use std::sync::Arc;
-use strike::{case::Case, check, deck, run, Error};
+use strike::{case::Case, check, deck, ranks::Ranks, run, Error};
 
 #[derive(Parser)]
 #[command(
@@ -144,13 +144,17 @@ macro_rules! say {
 const EXIT_INTERRUPTED: u8 = 130;
 
 fn main() -> std::process::ExitCode {
+    // MPI first (where started by a launcher): the other ranks only log warnings and errors.
+    let _mpi = strike::ranks::start();
+    let ranks = Ranks::world();
     // Colour only on a terminal (and never with NO_COLOR set): logs and files get plain text.
     let colour = std::io::stderr().is_terminal()
         && std::env::var_os("NO_COLOR").is_none_or(|v| v.is_empty());
     tracing_subscriber::fmt()
         .with_env_filter(
-            tracing_subscriber::EnvFilter::try_from_default_env()
-                .unwrap_or_else(|_| tracing_subscriber::EnvFilter::new("info")),
+            tracing_subscriber::EnvFilter::try_from_default_env().unwrap_or_else(|_| {
+                tracing_subscriber::EnvFilter::new(if ranks.is_root() { "info" } else { "warn" })
+            }),
         )
         .with_writer(std::io::stderr)
         .with_ansi(colour)
@@ -159,10 +163,18 @@ fn main() -> std::process::ExitCode {
     let _ = miette::set_hook(Box::new(move |_| {
         Box::new(miette::MietteHandlerOpts::new().color(colour).build())
     }));
-    match main_inner() {
+    match main_inner(ranks) {
         Ok(()) => std::process::ExitCode::SUCCESS,
         Err((report, interrupted)) => {
-            eprintln!("{report:?}");
+            // Every rank takes the same steps on the same data, so an error of another rank is
+            // the root's too, and the root reports it; the root's own (a file it could not
+            // write) must stop the other ranks.
+            if ranks.is_root() {
+                eprintln!("{report:?}");
+                if !interrupted {
+                    ranks.abort(1);
+                }
+            }
             if interrupted {
                 std::process::ExitCode::from(EXIT_INTERRUPTED)
             } else {
@@ -188,9 +200,16 @@ fn stop_flag() -> Result<Arc<AtomicBool>, Report> {
 }
 
 /// The command's work; an error comes with whether the run was interrupted.
-fn main_inner() -> Result<(), (Report, bool)> {
+fn main_inner(ranks: Ranks) -> Result<(), (Report, bool)> {
     let cli = Cli::parse();
     let plain = |r: Report| (r, false);
+    if ranks.size() > 1 && !matches!(cli.command, Command::Run { .. } | Command::Bench { .. }) {
+        return Err(plain(miette!(
+            help = "start the other commands without mpirun",
+            "only `strike run` and `strike bench` run on several MPI ranks ({} here)",
+            ranks.size()
+        )));
+    }
     match cli.command {
         Command::Run {
             case,
@@ -208,37 +227,51 @@ fn main_inner() -> Result<(), (Report, bool)> {
                 _ => Path::new("runs").join(&c.name),
             });
             tracing::info!(
-                "running {} ({}D) into {} on {} threads",
+                "running {} ({}D) into {} on {} threads{}",
                 case.display(),
                 c.dimension,
                 out_dir.display(),
-                rayon::current_num_threads()
+                rayon::current_num_threads(),
+                if ranks.size() > 1 {
+                    format!(" on each of {} MPI ranks", ranks.size())
+                } else {
+                    String::new()
+                }
             );
             let opts = run::RunOptions {
                 out_dir: out_dir.clone(),
-                progress: std::io::stderr().is_terminal(),
+                progress: ranks.is_root() && std::io::stderr().is_terminal(),
                 max_steps,
                 write_fields: true,
                 resume,
                 overwrite,
                 stop: Some(stop_flag().map_err(plain)?),
+                ranks,
             };
             let summary = run::run(&c, &opts).map_err(|e| {
                 let interrupted = matches!(e, Error::Interrupted { .. });
                 (report(e, &case), interrupted)
             })?;
-            say!("{}", check::summary_text(&summary));
-            say!("output in {}", out_dir.display());
+            if ranks.is_root() {
+                say!("{}", check::summary_text(&summary));
+                say!("output in {}", out_dir.display());
+            }
             Ok(())
         }
         Command::Bench { quick, json, cases } => {
-            let report =
-                strike::bench::run_all(quick, &cases, |c| say!("{}", strike::bench::line(c)))
-                    .map_err(|e| plain(miette!("{e}")))?;
-            let text = serde_json::to_string_pretty(&report).map_err(|e| plain(miette!("{e}")))?;
-            strike::output::atomic::write(&json, (text + "\n").as_bytes())
-                .map_err(|e| plain(miette!("cannot write {}: {e}", json.display())))?;
-            say!("written to {}", json.display());
+            let report = strike::bench::run_all(quick, &cases, ranks, |c| {
+                if ranks.is_root() {
+                    say!("{}", strike::bench::line(c));
+                }
+            })
+            .map_err(|e| plain(miette!("{e}")))?;
+            if ranks.is_root() {
+                let text =
+                    serde_json::to_string_pretty(&report).map_err(|e| plain(miette!("{e}")))?;
+                strike::output::atomic::write(&json, (text + "\n").as_bytes())
+                    .map_err(|e| plain(miette!("cannot write {}: {e}", json.display())))?;
+                say!("written to {}", json.display());
+            }
             Ok(())
         }
         Command::Materials { name } => {

@@ -68,14 +68,16 @@ struct Other<const D: usize> {
     spacing: f64,
 }
 
-/// The mixing figures of every pair of bodies, for the particles flagged in `near` (those with
-/// a neighbour of another body within the support). `spacing[b]` is body b's lattice spacing.
+/// The mixing figures of every pair of bodies, for the real particles in `owned` flagged in
+/// `near` (those with a neighbour of another body within the support). `spacing[b]` is body
+/// b's lattice spacing.
 pub fn mixing<const D: usize, K: Kernel>(
     kernel: K,
     p: &Particles<D>,
     nl: &NeighborList,
     near: impl Fn(usize) -> bool + Sync,
     spacing: &[f64],
+    owned: &std::ops::Range<usize>,
 ) -> Vec<PairMixing> {
     let bodies = spacing.len();
     let pairs = bodies * bodies.saturating_sub(1) / 2;
@@ -87,7 +89,8 @@ pub fn mixing<const D: usize, K: Kernel>(
         a
     };
     // Max and integer counts: the same result in any order (thread count).
-    (0..p.n_real)
+    owned
+        .clone()
         .into_par_iter()
         .filter(|&i| near(i))
         .fold(

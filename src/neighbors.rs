@@ -102,6 +102,9 @@ pub struct NeighborList {
     /// Per real particle: whether its list holds a particle of another class (body), as of the
     /// last [`NeighborList::classify`].
     pub mixed: Vec<bool>,
+    /// The real particles whose lists are built (an MPI rank's share, see `ranks`; None: all),
+    /// widened to whole chunks. The others' lists are empty.
+    owned: Option<std::ops::Range<usize>>,
 }
 
 /// Particles per chunk of lists (a power of two).
@@ -194,10 +197,30 @@ impl NeighborList {
         self.n_lists == 0
     }
 
-    /// The neighbours of real particle `i`, in increasing index (the canonical order).
+    /// The neighbours of real particle `i`, in increasing index (the canonical order); empty
+    /// outside the particles [`NeighborList::own`]s.
     #[inline]
     pub fn list(&self, i: usize) -> &[u32] {
         self.chunks[i >> CHUNK_SHIFT].list(i & (CHUNK - 1))
+    }
+
+    /// Build the lists of only these real particles from the next full build on (an MPI
+    /// rank's share; they must cover the particles the passes ask for until then).
+    pub fn own(&mut self, owned: std::ops::Range<usize>) {
+        self.owned = Some(owned);
+    }
+
+    /// Whether real particle i's list has been rebuilt at every step since it went dirty (see
+    /// [`NeighborList::refresh`]): a fast particle, whose search costs again at every step.
+    pub fn is_dirty(&self, i: usize) -> bool {
+        self.dirty.get(i).copied().unwrap_or(false)
+    }
+
+    /// Whether the lists of chunk `ci` are built.
+    fn chunk_owned(&self, ci: usize) -> bool {
+        self.owned
+            .as_ref()
+            .is_none_or(|o| ci * CHUNK < o.end && o.start < (ci + 1) * CHUNK)
     }
 
     /// The particles at `x` (with smoothing lengths `h`) in cell order: a locality-friendly
@@ -330,7 +353,7 @@ impl NeighborList {
         mixed
             .par_iter_mut()
             .enumerate()
-            .filter(|(i, _)| !only_dirty || dirty[*i])
+            .filter(|(i, _)| (!only_dirty || dirty[*i]) && nl.chunk_owned(i >> CHUNK_SHIFT))
             .for_each(|(i, m)| *m = nl.list(i).iter().any(|&j| class[j as usize] != class[i]));
         self.mixed = mixed;
     }
@@ -430,6 +453,7 @@ impl NeighborList {
         let last = D - 1;
         let dirty = &self.dirty;
         let n_lists = self.n_lists;
+        let owned = self.owned.clone();
         // The neighbours of real particle i, appended to `list`.
         let search = |i: usize, list: &mut Vec<u32>| {
             let xi = x[i];
@@ -490,6 +514,16 @@ impl NeighborList {
             || (Vec::new(), Vec::new()),
             |(scratch, ends), (ci, chunk)| {
                 let range = ci * CHUNK..((ci + 1) * CHUNK).min(n_lists);
+                if owned
+                    .as_ref()
+                    .is_some_and(|o| range.end <= o.start || o.end <= range.start)
+                {
+                    // Another rank's: no lists.
+                    chunk.ends.clear();
+                    chunk.ends.resize(range.len(), 0);
+                    chunk.items = Vec::new();
+                    return;
+                }
                 if dirty_only && !dirty[range.clone()].contains(&true) {
                     return;
                 }
@@ -729,6 +763,32 @@ mod tests {
             .wrapping_mul(6364136223846793005)
             .wrapping_add(1442695040888963407);
         (*seed >> 11) as f64 / (1u64 << 53) as f64
+    }
+
+    /// An MPI rank's share (`own`): the lists of its particles' chunks are those of the full
+    /// build, the other particles' are empty.
+    #[test]
+    fn owned_lists_are_those_of_the_full_build() {
+        let mut seed = 777u64;
+        let x: Vec<Vector<3>> = (0..2000)
+            .map(|_| Vector::<3>::new(rnd(&mut seed), rnd(&mut seed), rnd(&mut seed)))
+            .collect();
+        let h = vec![0.06; x.len()];
+        let mut full = NeighborList::default();
+        full.build(&x, &h, 1800, 0.01);
+        let mut share = NeighborList::default();
+        share.own(600..1100);
+        share.build(&x, &h, 1800, 0.01);
+        share.classify(&vec![0; x.len()], false);
+        let chunks = |i: usize| i / CHUNK;
+        for i in 0..1800 {
+            if (chunks(600)..=chunks(1099)).contains(&chunks(i)) {
+                assert_eq!(share.list(i), full.list(i), "particle {i}");
+                assert!(!share.list(i).is_empty());
+            } else {
+                assert!(share.list(i).is_empty(), "particle {i} is another rank's");
+            }
+        }
     }
 
     /// A compact cloud (dense grid) and one with far-flung debris (sparse grid), 2D and 3D,

@@ -25,6 +25,7 @@ use crate::output::picture::{self, SectionFrame};
 use crate::output::summary::Summary;
 use crate::output::vtk::{self, PvdWriter};
 use crate::particles::RealParticles;
+use crate::ranks::Ranks;
 use crate::simulation::{Diagnostics, Simulation};
 use std::path::{Path, PathBuf};
 use std::sync::atomic::{AtomicBool, Ordering};
@@ -50,6 +51,9 @@ pub struct RunOptions {
     /// Set from outside (on SIGINT or SIGTERM) to end the run after the step in progress, with
     /// a checkpoint and the status `interrupted`.
     pub stop: Option<Arc<AtomicBool>>,
+    /// The ranks of a distributed run (see `ranks`): each takes every step, the root alone
+    /// writes files.
+    pub ranks: Ranks,
 }
 
 /// Run a case; the summary is also written to `summary.json`. A run that goes unstable writes
@@ -120,7 +124,8 @@ struct Run<'a, const D: usize> {
     case: &'a Case,
     opts: &'a RunOptions,
     sim: Simulation<D>,
-    history: HistoryWriter,
+    /// The history (the root rank's only).
+    history: Option<HistoryWriter>,
     pvd: PvdWriter,
     state: RunState,
     last_snapshot: Option<u64>,
@@ -135,7 +140,10 @@ impl<const D: usize> Run<'_, D> {
 
     /// Snapshot (and checkpoint) of the current state, once per step.
     fn snapshot(&mut self) -> Result<()> {
-        if !self.opts.write_fields || self.last_snapshot == Some(self.sim.state.step) {
+        if !self.opts.write_fields
+            || !self.opts.ranks.is_root()
+            || self.last_snapshot == Some(self.sim.state.step)
+        {
             return Ok(());
         }
         self.last_snapshot = Some(self.sim.state.step);
@@ -148,7 +156,7 @@ impl<const D: usize> Run<'_, D> {
     fn checkpoint(&mut self) -> Result<()> {
         let mut run = self.state.clone();
         run.snapshots = self.pvd.entries().to_vec();
-        run.history_len = self.history.len();
+        run.history_len = self.history.as_ref().map_or(0, HistoryWriter::len);
         run.wall_seconds += self.start.elapsed().as_secs_f64();
         let physics = self.case.physics_fingerprint();
         let c = CheckpointRef::<D> {
@@ -210,12 +218,13 @@ impl<const D: usize> Run<'_, D> {
             if let Some(m) = max_steps.filter(|&m| self.sim.state.step >= m) {
                 break Ending::MaxSteps(m);
             }
-            if self
+            // Every rank stops at the same step, however the signal reached them.
+            let stop = self
                 .opts
                 .stop
                 .as_ref()
-                .is_some_and(|s| s.load(Ordering::Relaxed))
-            {
+                .is_some_and(|s| s.load(Ordering::Relaxed));
+            if self.opts.ranks.any(stop) {
                 break Ending::Interrupted;
             }
             let d = match self.sim.step(self.step_limit()) {
@@ -224,7 +233,7 @@ impl<const D: usize> Run<'_, D> {
             };
             self.state.tally.add(&d);
             if (self.sim.state.step - 1).is_multiple_of(self.case.output.history_every) {
-                if let Err(e) = self.history.row(&d) {
+                if let Some(Err(e)) = self.history.as_mut().map(|h| h.row(&d)) {
                     break Ending::Failed(e);
                 }
             }
@@ -275,9 +284,11 @@ impl<const D: usize> Run<'_, D> {
         let mut done = self.snapshot();
         if !unstable {
             let last = self.state.tally.last.clone();
-            done = done.and_then(|()| self.history.row(&last));
+            if let Some(h) = &mut self.history {
+                done = done.and_then(|()| h.row(&last));
+            }
         }
-        if self.opts.write_fields {
+        if self.opts.write_fields && self.opts.ranks.is_root() {
             done = done.and_then(|()| {
                 write_pictures(
                     self.case,
@@ -501,11 +512,15 @@ fn check_disk_space(case: &Case, n: usize, out: &Path) -> Result<()> {
 }
 
 fn run_dim<const D: usize>(case: &Case, opts: &RunOptions) -> Result<Summary> {
-    prepare_output(case, opts)?;
+    let root = opts.ranks.is_root();
+    if root {
+        prepare_output(case, opts)?;
+    }
     let out = &opts.out_dir;
     let mut sim = Simulation::<D>::new(case)?;
+    sim.distribute(opts.ranks);
     let n = sim.particles.n_real;
-    if opts.write_fields {
+    if opts.write_fields && root {
         check_disk_space(case, n, out)?;
     }
     let max_steps = match (case.simulation.max_steps, opts.max_steps) {
@@ -527,7 +542,9 @@ fn run_dim<const D: usize>(case: &Case, opts: &RunOptions) -> Result<Summary> {
             }
             sim.restore(c.particles, c.sim, c.searches);
             let pvd = PvdWriter::resume(&pvd_path, c.run.snapshots.clone());
-            let history = HistoryWriter::append(&history_path, c.run.history_len)?;
+            let history = root
+                .then(|| HistoryWriter::append(&history_path, c.run.history_len))
+                .transpose()?;
             let mut state = c.run;
             // The output settings may have changed since: the next snapshot is counted anew.
             state.next_snapshot = case.output.snapshot_interval.map_or(f64::INFINITY, |i| {
@@ -555,7 +572,8 @@ fn run_dim<const D: usize>(case: &Case, opts: &RunOptions) -> Result<Summary> {
             };
             (
                 state,
-                HistoryWriter::create(&history_path, &sim.body_names)?,
+                root.then(|| HistoryWriter::create(&history_path, &sim.body_names))
+                    .transpose()?,
                 PvdWriter::new(&pvd_path),
             )
         }
@@ -603,7 +621,11 @@ fn run_dim<const D: usize>(case: &Case, opts: &RunOptions) -> Result<Summary> {
         Ending::Failed(e) => ("failed", e.to_string(), Some(e)),
     };
     let summary = run.summary(status, reason);
-    let written = summary.write(&out.join("summary.json"));
+    let written = if root {
+        summary.write(&out.join("summary.json"))
+    } else {
+        Ok(())
+    };
     match (error, written) {
         (Some(e), _) => Err(e),
         (None, Err(e)) => Err(e),

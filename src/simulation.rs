@@ -12,8 +12,11 @@ use crate::mixing::{self, PairMixing};
 use crate::neighbors::{NeighborList, Refresh};
 use crate::particles::{to3, Particles, Tensor};
 use crate::physics::{self, Model, Rates};
+use crate::ranks::Ranks;
 use crate::setup;
 use rayon::prelude::*;
+use std::ops::Range;
+use std::time::Instant;
 
 /// Global quantities at t_n (the start of the step that produced them).
 #[derive(Debug, Clone, Default, PartialEq, serde::Serialize, serde::Deserialize)]
@@ -80,6 +83,14 @@ pub struct Simulation<const D: usize> {
     corr: Vec<Tensor<D>>,
     /// CN-SPH: the surface indicator λ_min of every particle, ghosts included.
     lambda: Vec<f64>,
+    /// The ranks the passes are split over (see `ranks`), and each one's range of particles,
+    /// set at each search.
+    ranks: Ranks,
+    parts: Vec<Range<usize>>,
+    /// Seconds this rank spent on its own share since the ranges were set (to balance the
+    /// next ones), and in the exchanges between ranks in all.
+    busy: f64,
+    exchanging: f64,
 }
 
 /// The scalar state of a run in progress, beside its particles: what a checkpoint keeps.
@@ -230,7 +241,23 @@ impl<const D: usize> Simulation<D> {
             corrections: Vec::new(),
             corr: Vec::new(),
             lambda: Vec::new(),
+            ranks: Ranks::SERIAL,
+            parts: Vec::new(),
+            busy: 0.0,
+            exchanging: 0.0,
         })
+    }
+
+    /// Split the passes of each step over `ranks` (every rank must call this and then take the
+    /// same steps); the results do not change by a bit.
+    pub fn distribute(&mut self, ranks: Ranks) {
+        self.ranks = ranks;
+        self.parts.clear();
+    }
+
+    /// Seconds spent in the exchanges between ranks so far (0 on one rank).
+    pub fn exchange_seconds(&self) -> f64 {
+        self.exchanging
     }
 
     /// The state a checkpoint keeps: the real particles and the scalars. Neighbour lists and
@@ -276,12 +303,15 @@ impl<const D: usize> Simulation<D> {
             }
         }
         if need == Refresh::Partial {
+            let start = Instant::now();
             self.neighbors.rebuild_dirty(&p.x, &self.h_search);
             self.neighbors.classify(&p.body, true);
             self.stats.partial_searches += 1;
+            self.busy += start.elapsed().as_secs_f64();
         }
         if need == Refresh::Full {
-            if reorder && self.state.step > 0 {
+            let reordered = reorder && self.state.step > 0;
+            if reordered {
                 // Cell order of the real particles' current positions: a function of the
                 // state alone, so a resumed run reorders exactly as the uninterrupted one.
                 p.truncate_to_real();
@@ -295,15 +325,28 @@ impl<const D: usize> Simulation<D> {
                 p.permute(&self.order);
                 self.state.last_reorder = self.state.step;
             }
+            let times = self.ranks.gather_each(std::mem::take(&mut self.busy));
+            let old = (&self.parts[..], &times[..]);
+            let order = reordered.then_some(&self.order[..]);
+            self.parts = rebalance(self.ranks, p.n_real, &self.rates.particles, old, order);
+            if self.ranks.size() > 1 {
+                self.neighbors.own(self.parts[self.ranks.rank()].clone());
+            }
             search_radii(p, wide, &mut self.h_search);
             let h_max = self.h_search.iter().copied().fold(0.0_f64, f64::max);
             let skin = SKIN * h_max;
             self.ghosts.rebuild(p, &self.symmetry, 2.0 * h_max + skin);
             search_radii(p, wide, &mut self.h_search);
+            let start = Instant::now();
             self.neighbors.build(&p.x, &self.h_search, p.n_real, skin);
             self.neighbors.classify(&p.body, false);
             self.stats.searches += 1;
+            self.busy += start.elapsed().as_secs_f64();
         }
+        // This rank's time on its share, without the waits in the exchanges.
+        let mut lap = Instant::now();
+        let (ranks, parts) = (self.ranks, &self.parts[..]);
+        let owned = &parts[ranks.rank()];
         // CN-SPH: the gradient corrections, in their own pass before the rates.
         self.corr.clear();
         self.lambda.clear();
@@ -311,10 +354,20 @@ impl<const D: usize> Simulation<D> {
         let cn = self.model.formulation == Formulation::Corrected;
         if cn {
             let (nl, model, out) = (&self.neighbors, &self.model, &mut self.corrections);
-            fallbacks = match self.kernel {
-                KernelKind::CubicSpline => physics::corrections(CubicSpline, p, nl, model, out),
-                KernelKind::WendlandC2 => physics::corrections(WendlandC2, p, nl, model, out),
-            };
+            match self.kernel {
+                KernelKind::CubicSpline => {
+                    physics::corrections(CubicSpline, p, nl, model, owned, out);
+                }
+                KernelKind::WendlandC2 => {
+                    physics::corrections(WendlandC2, p, nl, model, owned, out);
+                }
+            }
+            self.busy += lap.elapsed().as_secs_f64();
+            lap = Instant::now();
+            ranks.share(out, parts);
+            self.exchanging += lap.elapsed().as_secs_f64();
+            lap = Instant::now();
+            fallbacks = out.iter().filter(|c| c.fallback).count();
             self.stats.correction_fallbacks += fallbacks as u64;
             self.corr.extend(self.corrections.iter().map(|c| c.b));
             self.lambda
@@ -343,13 +396,28 @@ impl<const D: usize> Simulation<D> {
                 b: &self.corr,
             });
             match self.kernel {
-                KernelKind::CubicSpline => {
-                    physics::colour_states(CubicSpline, p, nl, model, surfaces, &mut self.colour)
-                }
-                KernelKind::WendlandC2 => {
-                    physics::colour_states(WendlandC2, p, nl, model, surfaces, &mut self.colour)
-                }
+                KernelKind::CubicSpline => physics::colour_states(
+                    CubicSpline,
+                    p,
+                    nl,
+                    model,
+                    (surfaces, owned),
+                    &mut self.colour,
+                ),
+                KernelKind::WendlandC2 => physics::colour_states(
+                    WendlandC2,
+                    p,
+                    nl,
+                    model,
+                    (surfaces, owned),
+                    &mut self.colour,
+                ),
             }
+            self.busy += lap.elapsed().as_secs_f64();
+            lap = Instant::now();
+            ranks.share(&mut self.colour, parts);
+            self.exchanging += lap.elapsed().as_secs_f64();
+            lap = Instant::now();
             // A ghost's state is its source's, with the normal mirrored.
             self.ghosts
                 .extend_to_ghosts_with(&mut self.colour, &self.symmetry, |mut s, axis| {
@@ -361,19 +429,26 @@ impl<const D: usize> Simulation<D> {
         let fields = (&self.colour[..], &self.corr[..]);
         match self.kernel {
             KernelKind::CubicSpline => {
-                physics::compute_rates(CubicSpline, p, nl, model, fields, &mut self.rates)
+                physics::compute_rates(CubicSpline, p, nl, model, fields, owned, &mut self.rates)
             }
             KernelKind::WendlandC2 => {
-                physics::compute_rates(WendlandC2, p, nl, model, fields, &mut self.rates)
+                physics::compute_rates(WendlandC2, p, nl, model, fields, owned, &mut self.rates)
             }
         }
+        self.busy += lap.elapsed().as_secs_f64();
+        lap = Instant::now();
+        ranks.share(&mut self.rates.particles, parts);
+        self.exchanging += lap.elapsed().as_secs_f64();
         let rates = &self.rates.particles;
         let near = |i: usize| rates[i].min_interbody_gap.is_finite();
         let (nl, spacing) = (&self.neighbors, &self.spacing);
-        let mixing = match self.kernel {
-            KernelKind::CubicSpline => mixing::mixing(CubicSpline, p, nl, near, spacing),
-            KernelKind::WendlandC2 => mixing::mixing(WendlandC2, p, nl, near, spacing),
+        let mut mixing = match self.kernel {
+            KernelKind::CubicSpline => mixing::mixing(CubicSpline, p, nl, near, spacing, owned),
+            KernelKind::WendlandC2 => mixing::mixing(WendlandC2, p, nl, near, spacing, owned),
         };
+        let lap = Instant::now();
+        ranks.combine_mixing(&mut mixing);
+        self.exchanging += lap.elapsed().as_secs_f64();
         let n = p.n_real;
         // The stable step, its growth limited to 25 % a step; the collapse check uses it before
         // it is shortened to land on an output time. (min and max are exact in any order.)
@@ -577,6 +652,42 @@ impl<const D: usize> Simulation<D> {
             ),
         })
     }
+}
+
+/// The ranks' ranges of the `n` real particles until the next full build (before it: the
+/// lists are built for them). Each particle weighs its neighbour count in the last pass
+/// (`rates`: the pass's cost) times the seconds per neighbour its rank took since the `old`
+/// ranges were set (`old.1`: each rank's time), so that costs the count does not see (a fast
+/// particle's search at every step) move work away from the rank that had them. `order`: the
+/// old index of each particle, where they were reordered since. Every rank computes the same
+/// ranges (from the exchanged times); the results do not depend on them.
+fn rebalance<const D: usize>(
+    ranks: Ranks,
+    n: usize,
+    rates: &[physics::ParticleRates<D>],
+    (old, times): (&[Range<usize>], &[f64]),
+    order: Option<&[usize]>,
+) -> Vec<Range<usize>> {
+    let base = |k: usize| rates.get(k).map_or(0.0, |r| f64::from(r.neighbors)) + 8.0;
+    // Seconds per unit of weight of each old range (1 where nothing was measured yet).
+    let per: Vec<f64> = old
+        .iter()
+        .zip(times)
+        .map(|(r, &t)| {
+            let w: f64 = r.clone().map(base).sum();
+            if t > 0.0 && w > 0.0 && rates.len() == n {
+                t / w
+            } else {
+                1.0
+            }
+        })
+        .collect();
+    let cost = |i: usize| {
+        let k = order.map_or(i, |o| o[i]);
+        let owner = old.partition_point(|r| r.end <= k);
+        base(k) * per.get(owner).copied().unwrap_or(1.0)
+    };
+    ranks.split(n, cost)
 }
 
 /// The neighbour search radius of each particle (ghosts included): its smoothing length, or

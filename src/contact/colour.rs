@@ -42,7 +42,7 @@ use crate::material::Material;
 use crate::neighbors::NeighborList;
 use crate::particles::{Particles, Tensor};
 use crate::physics::correction::{plane_normal, LAMBDA_SURFACE};
-use rayon::prelude::*;
+use std::ops::Range;
 
 /// The colour of a flat square (2D) or simple-cubic (3D) lattice of spacing Δp seen by a
 /// particle whose facing layer is d away (head-on), tabulated for d ∈ [D_MIN, 1] Δp and read
@@ -220,7 +220,8 @@ pub struct Surfaces<'a, const D: usize> {
     pub b: &'a [Tensor<D>],
 }
 
-/// The colour state of every real particle (`out[i]`), from its neighbours within the support.
+/// The colour state of the real particles in `owned` (`out[i]`; `out` holds one for every real
+/// particle), from its neighbours within the support.
 ///
 /// The outward normal is −Σ_k V0_k ∇_i W_ik over its own body in conventional SPH. With
 /// CN-SPH's `surfaces`, where the body's boundary is its boundary particles, it is the normal of
@@ -236,10 +237,10 @@ pub fn states<const D: usize, K: Kernel>(
     nl: &NeighborList,
     meeting: &impl Meeting,
     (law, surfaces): (Option<&ColourLaw>, Option<Surfaces<D>>),
+    owned: &Range<usize>,
     out: &mut Vec<ColourState>,
 ) {
-    out.clear();
-    out.par_extend((0..p.n_real).into_par_iter().map(|i| {
+    crate::ranks::fill(out, p.n_real, owned, |i| {
         let bi = p.body[i];
         // Most particles have no neighbour of another body (see `NeighborList::classify`).
         if !nl.mixed.get(i).copied().unwrap_or(true) {
@@ -340,7 +341,7 @@ pub fn states<const D: usize, K: Kernel>(
             s.energy = 0.5 * vol0 * work;
         }
         s
-    }));
+    });
 }
 
 /// The contact normal of a pair (i of body A, j of body B), pointing from A into B: the

@@ -25,6 +25,7 @@ use crate::kernel::Kernel;
 use crate::neighbors::NeighborList;
 use crate::particles::{Particles, Tensor};
 use rayon::prelude::*;
+use std::ops::Range;
 
 /// Below this smallest eigenvalue of A_i the correction is not applied (see the module
 /// doc).
@@ -46,6 +47,17 @@ pub struct Correction<const D: usize> {
     pub fallback: bool,
 }
 
+/// A placeholder, for the particles another rank evaluates (see `ranks`).
+impl<const D: usize> Default for Correction<D> {
+    fn default() -> Self {
+        Correction {
+            b: Tensor::identity(),
+            lambda_min: 1.0,
+            fallback: false,
+        }
+    }
+}
+
 /// Neighbours are summed this many at a time, one lane each, with no branch, so that the sums
 /// vectorise; the lanes are added up in lane order, the same on every machine.
 const LANES: usize = 4;
@@ -59,9 +71,9 @@ struct Point<const D: usize> {
     body: u32,
 }
 
-/// The corrections of every real particle (`out[i]`), from its neighbours of bodies `joined`
-/// to its own (the body itself, and welded bodies). Returns how many fell back to the
-/// uncorrected gradient.
+/// The corrections of the real particles in `owned` (`out[i]`; `out` holds one for every real
+/// particle), from its neighbours of bodies `joined` to its own (the body itself, and welded
+/// bodies). Returns how many of them fell back to the uncorrected gradient.
 ///
 /// ∇_i W_ij is radial, so A_i = −Σ_j V_j (1/r dW/dr) x_ij ⊗ x_ij is symmetric: six sums in 3D.
 pub fn corrections<const D: usize, K: Kernel>(
@@ -69,9 +81,18 @@ pub fn corrections<const D: usize, K: Kernel>(
     p: &Particles<D>,
     nl: &NeighborList,
     joined: impl Fn(u32, u32) -> bool + Sync,
+    owned: &Range<usize>,
     out: &mut Vec<Correction<D>>,
 ) -> usize {
-    corrections_on(kernel, p, nl, joined, out, crate::physics::wide_lanes())
+    corrections_on(
+        kernel,
+        p,
+        nl,
+        joined,
+        owned,
+        out,
+        crate::physics::wide_lanes(),
+    )
 }
 
 /// [`corrections`], on AVX2 (`wide`, where the CPU has it) or portable: the same numbers.
@@ -80,6 +101,7 @@ pub(crate) fn corrections_on<const D: usize, K: Kernel>(
     p: &Particles<D>,
     nl: &NeighborList,
     joined: impl Fn(u32, u32) -> bool + Sync,
+    owned: &Range<usize>,
     out: &mut Vec<Correction<D>>,
     wide: bool,
 ) -> usize {
@@ -102,8 +124,7 @@ pub(crate) fn corrections_on<const D: usize, K: Kernel>(
         body: u32::MAX,
     });
     let points = &points[..];
-    out.clear();
-    out.par_extend((0..p.n_real).into_par_iter().map(|i| {
+    crate::ranks::fill(out, p.n_real, owned, |i| {
         // Particles with no neighbour of another body (see `NeighborList::classify`) need no
         // check of the pair's bodies.
         let mixed = nl.mixed.get(i).copied().unwrap_or(true);
@@ -114,8 +135,8 @@ pub(crate) fn corrections_on<const D: usize, K: Kernel>(
             return unsafe { correction_avx2(kernel, i, list, points, mixed, &joined) };
         }
         correction(kernel, i, list, points, mixed, &joined)
-    }));
-    out.iter().filter(|c| c.fallback).count()
+    });
+    out[owned.clone()].iter().filter(|c| c.fallback).count()
 }
 
 /// [`correction`] compiled for AVX2 (bit-identical: see `physics::wide_lanes`).
@@ -413,7 +434,7 @@ mod tests {
         let mut nl = NeighborList::default();
         nl.build(&p.x, &p.h, p.n_real, 0.0);
         let mut c = Vec::new();
-        corrections(CubicSpline, &p, &nl, |a, b| a == b, &mut c);
+        corrections(CubicSpline, &p, &nl, |a, b| a == b, &(0..p.n_real), &mut c);
         let (inside, face, corner) = (c[4 + 4 * 9], c[4], c[0]);
         assert!(
             (inside.lambda_min - 1.0).abs() < 0.05,
@@ -447,7 +468,14 @@ mod tests {
         );
         let mut nl = NeighborList::default();
         nl.build(&line.x, &line.h, line.n_real, 0.0);
-        let fallbacks = corrections(CubicSpline, &line, &nl, |a, b| a == b, &mut c);
+        let fallbacks = corrections(
+            CubicSpline,
+            &line,
+            &nl,
+            |a, b| a == b,
+            &(0..line.n_real),
+            &mut c,
+        );
         assert_eq!(fallbacks, 6);
         assert!(c.iter().all(|c| c.b == Tensor::<2>::identity()));
     }

@@ -39,6 +39,7 @@ use crate::material::Material;
 use crate::neighbors::NeighborList;
 use crate::particles::{Particles, Tensor, Vector};
 use rayon::prelude::*;
+use std::ops::Range;
 
 /// How particles of two bodies interact.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -146,35 +147,46 @@ pub fn needs_colour_states<const D: usize>(model: &Model<D>) -> bool {
             && model.pairs.any(|r| matches!(r, PairRule::Contact(_))))
 }
 
-/// The colour-law state of each real particle (see [`colour::states`]); nothing where
-/// [`needs_colour_states`] says so. `surfaces`: CN-SPH's surface indicator and corrections of
-/// every particle, ghosts included. Ghosts take their sources' (see `boundary`).
+/// The colour-law state of the real particles in `owned` (`out[i]`, see [`colour::states`]);
+/// nothing where [`needs_colour_states`] says so. `surfaces`: CN-SPH's surface indicator and
+/// corrections of every particle, ghosts included. Ghosts take their sources' (see `boundary`).
 pub fn colour_states<const D: usize, K: Kernel>(
     kernel: K,
     p: &Particles<D>,
     nl: &NeighborList,
     model: &Model<D>,
-    surfaces: Option<colour::Surfaces<D>>,
+    (surfaces, owned): (Option<colour::Surfaces<D>>, &Range<usize>),
     out: &mut Vec<ColourState>,
 ) {
-    out.clear();
     if needs_colour_states(model) {
         let law = model.colour.as_ref();
-        colour::states(kernel, p, nl, &BodyPairs(model), (law, surfaces), out);
+        colour::states(
+            kernel,
+            p,
+            nl,
+            &BodyPairs(model),
+            (law, surfaces),
+            owned,
+            out,
+        );
+    } else {
+        out.clear();
     }
 }
 
-/// CN-SPH's gradient correction of every real particle (see [`correction`]), over its own
-/// body and the bodies welded to it; returns how many kept the uncorrected gradient.
+/// CN-SPH's gradient correction of the real particles in `owned` (`out[i]`, see
+/// [`correction`]), over its own body and the bodies welded to it; returns how many of them
+/// kept the uncorrected gradient.
 pub fn corrections<const D: usize, K: Kernel>(
     kernel: K,
     p: &Particles<D>,
     nl: &NeighborList,
     model: &Model<D>,
+    owned: &Range<usize>,
     out: &mut Vec<correction::Correction<D>>,
 ) -> usize {
     let joined = |a: u32, b: u32| a == b || matches!(model.pairs.rule(a, b), PairRule::Conserve);
-    correction::corrections(kernel, p, nl, joined, out)
+    correction::corrections(kernel, p, nl, joined, owned, out)
 }
 
 /// Rates of change and per-particle diagnostics of one real particle, from one pass.
@@ -202,6 +214,24 @@ pub struct ParticleRates<const D: usize> {
     pub min_interbody_gap: f64,
     /// Neighbours within the support (the list may hold more, see `neighbors`).
     pub neighbors: u32,
+}
+
+/// A placeholder, for the particles another rank evaluates (see `ranks`).
+impl<const D: usize> Default for ParticleRates<D> {
+    fn default() -> Self {
+        ParticleRates {
+            acc: Vector::zeros(),
+            drho: 0.0,
+            de: 0.0,
+            de_lag: 0.0,
+            grad_v: Tensor::zeros(),
+            contact_force: Vector::zeros(),
+            contact_energy: 0.0,
+            dt: f64::INFINITY,
+            min_interbody_gap: f64::INFINITY,
+            neighbors: 0,
+        }
+    }
 }
 
 /// The pass's output (one record per real particle) and its work buffers.
@@ -333,7 +363,8 @@ fn dot<const D: usize>(a: &[f64; D], b: &[f64; D]) -> f64 {
     s
 }
 
-/// Evaluate all rates at the particles' current state (positions, velocities `p.v`, stress).
+/// Evaluate the rates of the real particles in `owned` (`out.particles[i]`) at the particles'
+/// current state (positions, velocities `p.v`, stress).
 ///
 /// `colour` holds the colour-law state of every particle, ghosts included (see
 /// [`colour::states`]); it may be empty when no pair of bodies uses the colour law. `corr`
@@ -345,18 +376,30 @@ pub fn compute_rates<const D: usize, K: Kernel>(
     nl: &NeighborList,
     model: &Model<D>,
     (colour, corr): (&[ColourState], &[Tensor<D>]),
+    owned: &Range<usize>,
     out: &mut Rates<D>,
 ) {
-    compute_rates_on(kernel, p, nl, model, (colour, corr), out, wide_lanes());
+    compute_rates_on(
+        kernel,
+        p,
+        nl,
+        model,
+        (colour, corr),
+        owned,
+        out,
+        wide_lanes(),
+    );
 }
 
 /// [`compute_rates`], on 256-bit vectors (`wide`, where [`wide_lanes`]) or portable code.
+#[allow(clippy::too_many_arguments)]
 fn compute_rates_on<const D: usize, K: Kernel>(
     kernel: K,
     p: &Particles<D>,
     nl: &NeighborList,
     model: &Model<D>,
     (colour, corr): (&[ColourState], &[Tensor<D>]),
+    owned: &Range<usize>,
     out: &mut Rates<D>,
     wide: bool,
 ) {
@@ -448,21 +491,19 @@ fn compute_rates_on<const D: usize, K: Kernel>(
     // One monomorphised pass per (artificial stress, CN-SPH) combination, on AVX2 or portable.
     macro_rules! run {
         ($art:literal, $cn:literal) => {
-            out.particles
-                .par_extend((0..p.n_real).into_par_iter().map(|i| {
-                    let list = nl.list(i);
-                    #[cfg(target_arch = "x86_64")]
-                    if wide {
-                        // SAFETY: the CPU has AVX2 (asserted above).
-                        return unsafe {
-                            particle_rates_avx2::<D, K, $art, $cn>(kernel, i, list, &pass)
-                        };
-                    }
-                    particle_rates::<D, K, $art, $cn>(kernel, i, list, &pass)
-                }))
+            crate::ranks::fill(&mut out.particles, p.n_real, owned, |i| {
+                let list = nl.list(i);
+                #[cfg(target_arch = "x86_64")]
+                if wide {
+                    // SAFETY: the CPU has AVX2 (asserted above).
+                    return unsafe {
+                        particle_rates_avx2::<D, K, $art, $cn>(kernel, i, list, &pass)
+                    };
+                }
+                particle_rates::<D, K, $art, $cn>(kernel, i, list, &pass)
+            })
         };
     }
-    out.particles.clear();
     match (any_art, cn) {
         (false, false) => run!(false, false),
         (true, false) => run!(true, false),
@@ -998,7 +1039,8 @@ type = "welded"
         nl.build(&p.x, &p.h, p.n_real, 0.1 * p.h[0]);
         let (mut wide, mut portable) = (Rates::default(), Rates::default());
         let mut states = Vec::new();
-        colour_states(CubicSpline, &p, &nl, &model, None, &mut states);
+        let all = 0..p.n_real;
+        colour_states(CubicSpline, &p, &nl, &model, (None, &all), &mut states);
         assert!(
             states.iter().any(|s| s.coef > 0.0),
             "the colour law is at work"
@@ -1009,6 +1051,7 @@ type = "welded"
             &nl,
             &model,
             (&states, &[]),
+            &all,
             &mut wide,
             true,
         );
@@ -1018,6 +1061,7 @@ type = "welded"
             &nl,
             &model,
             (&states, &[]),
+            &all,
             &mut portable,
             false,
         );
@@ -1033,20 +1077,30 @@ type = "welded"
         let joined =
             |a: u32, b: u32| a == b || matches!(model.pairs.rule(a, b), PairRule::Conserve);
         let (mut cw, mut cp) = (Vec::new(), Vec::new());
-        correction::corrections_on(CubicSpline, &p, &nl, joined, &mut cw, true);
-        correction::corrections_on(CubicSpline, &p, &nl, joined, &mut cp, false);
+        correction::corrections_on(CubicSpline, &p, &nl, joined, &all, &mut cw, true);
+        correction::corrections_on(CubicSpline, &p, &nl, joined, &all, &mut cp, false);
         assert_eq!(cw, cp);
         assert!(cw
             .iter()
             .any(|c| !c.fallback && c.b != Tensor::<3>::identity()));
         let b: Vec<Tensor<3>> = cw.iter().map(|c| c.b).collect();
-        compute_rates_on(CubicSpline, &p, &nl, &model, (&states, &b), &mut wide, true);
         compute_rates_on(
             CubicSpline,
             &p,
             &nl,
             &model,
             (&states, &b),
+            &all,
+            &mut wide,
+            true,
+        );
+        compute_rates_on(
+            CubicSpline,
+            &p,
+            &nl,
+            &model,
+            (&states, &b),
+            &all,
             &mut portable,
             false,
         );
@@ -1089,11 +1143,30 @@ shape = { type = "rectangle", min = [0.0, 0.0], max = [8.0e-3, 6.0e-3] }
         let mut nl = NeighborList::default();
         nl.build(&p.x, &p.h, p.n_real, 0.0);
         let mut c = Vec::new();
-        assert_eq!(corrections(CubicSpline, &p, &nl, &model, &mut c), 0);
+        assert_eq!(
+            corrections(CubicSpline, &p, &nl, &model, &(0..p.n_real), &mut c),
+            0
+        );
         let b: Vec<Tensor<2>> = c.iter().map(|c| c.b).collect();
         let (mut cn, mut plain) = (Rates::default(), Rates::default());
-        compute_rates(CubicSpline, &p, &nl, &model, (&[], &b), &mut cn);
-        compute_rates(CubicSpline, &p, &nl, &model, (&[], &[]), &mut plain);
+        compute_rates(
+            CubicSpline,
+            &p,
+            &nl,
+            &model,
+            (&[], &b),
+            &(0..p.n_real),
+            &mut cn,
+        );
+        compute_rates(
+            CubicSpline,
+            &p,
+            &nl,
+            &model,
+            (&[], &[]),
+            &(0..p.n_real),
+            &mut plain,
+        );
         let worst = |r: &Rates<2>| {
             r.particles
                 .iter()
@@ -1150,7 +1223,15 @@ stiffness = 1.0
         let mut nl = NeighborList::default();
         nl.build(&p.x, &p.h, p.n_real, 0.0);
         let mut rates = Rates::default();
-        compute_rates(CubicSpline, &p, &nl, &model, (&[], &[]), &mut rates);
+        compute_rates(
+            CubicSpline,
+            &p,
+            &nl,
+            &model,
+            (&[], &[]),
+            &(0..p.n_real),
+            &mut rates,
+        );
         let c = p.c[0];
         let expect = model.cfl * p.h[0] / (c + 1000.0 + 0.6 * model.alpha * c);
         assert!(rates.particles[0].neighbors == 1);

@@ -250,7 +250,7 @@ pub fn linear_field_errors<const D: usize>(n: usize, jitter: f64, which: &[usize
     nl.build(&p.x, &p.h, p.n_real, 0.0);
     let mut c = Vec::new();
     // A 9² or 7³ block has no particle whose matrix needs the fallback.
-    corrections(CubicSpline, &p, &nl, |a, b| a == b, &mut c);
+    corrections(CubicSpline, &p, &nl, |a, b| a == b, &(0..p.n_real), &mut c);
     let shepard = shepard(CubicSpline, &p, &nl, |a, b| a == b);
     let mut e = [0.0_f64; 4];
     for &i in which {
@@ -324,7 +324,7 @@ law = "{law}"
     let (mut c, mut b, mut lambda) = (Vec::new(), Vec::new(), Vec::new());
     let cn = formulation == Formulation::Corrected;
     if cn {
-        crate::physics::corrections(CubicSpline, &p, &nl, &model, &mut c);
+        crate::physics::corrections(CubicSpline, &p, &nl, &model, &(0..p.n_real), &mut c);
         b = c.iter().map(|c| c.b).collect();
         lambda = c.iter().map(|c| c.lambda_min).collect();
     }
@@ -333,9 +333,24 @@ law = "{law}"
         b: &b,
     });
     let mut states = Vec::new();
-    colour_states(CubicSpline, &p, &nl, &model, surfaces, &mut states);
+    colour_states(
+        CubicSpline,
+        &p,
+        &nl,
+        &model,
+        (surfaces, &(0..p.n_real)),
+        &mut states,
+    );
     let mut rates = Rates::default();
-    compute_rates(CubicSpline, &p, &nl, &model, (&states, &b), &mut rates);
+    compute_rates(
+        CubicSpline,
+        &p,
+        &nl,
+        &model,
+        (&states, &b),
+        &(0..p.n_real),
+        &mut rates,
+    );
     let f = rates.particles.iter().map(|r| r.contact_force).collect();
     Ok((p, f))
 }

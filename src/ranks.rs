@@ -1,0 +1,269 @@
+//! The processes of a distributed run (MPI, with the `mpi` cargo feature) and how the work of a
+//! step is split between them.
+//!
+//! **Replicated state, split passes.** Every rank holds every particle and takes every step
+//! itself; the passes that cost (CN-SPH's corrections, the colour states and the rates) are
+//! split: each rank evaluates a contiguous range of particles in cell order (a space-filling
+//! curve through the blocks of cells, so a range is a compact piece of the bodies), the ranges
+//! weighted by neighbour count, and the ranks then exchange their results (all-gather). A
+//! particle's rates come from exactly the arithmetic of the serial run whichever rank computes
+//! them, and everything else (search, integration, sums, checks) is the serial code on the
+//! same data, so an MPI run is bit-identical to the serial one on any number of ranks, and a
+//! checkpoint restarts on any number. What it does not give yet is memory per rank falling
+//! with the ranks (each holds the whole state) or scaling past a few nodes: that needs halos
+//! in place of the all-gather (see the README's "Not yet").
+//!
+//! Without the feature, or when the program was not started by an MPI launcher, there is one
+//! rank and nothing is exchanged.
+
+use crate::mixing::PairMixing;
+use rayon::prelude::*;
+use std::ops::Range;
+
+/// This process's rank and the number of ranks.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct Ranks {
+    rank: usize,
+    size: usize,
+}
+
+impl Default for Ranks {
+    fn default() -> Self {
+        Ranks::SERIAL
+    }
+}
+
+impl Ranks {
+    /// One process: nothing is split or exchanged.
+    pub const SERIAL: Ranks = Ranks { rank: 0, size: 1 };
+
+    /// The ranks of this run: MPI's world after [`start`], otherwise [`Ranks::SERIAL`].
+    pub fn world() -> Ranks {
+        #[cfg(feature = "mpi")]
+        if mpi::is_initialized() {
+            use mpi::topology::Communicator;
+            let world = mpi::topology::SimpleCommunicator::world();
+            return Ranks {
+                rank: world.rank() as usize,
+                size: world.size() as usize,
+            };
+        }
+        Ranks::SERIAL
+    }
+
+    pub fn rank(&self) -> usize {
+        self.rank
+    }
+
+    pub fn size(&self) -> usize {
+        self.size
+    }
+
+    /// The rank that writes the outputs and prints.
+    pub fn is_root(&self) -> bool {
+        self.rank == 0
+    }
+
+    /// Split 0..n into one contiguous range per rank with about equal total `cost` (of each
+    /// particle, ≥ 0). Deterministic: the same on every rank for the same costs.
+    pub fn split(&self, n: usize, cost: impl Fn(usize) -> f64) -> Vec<Range<usize>> {
+        if self.size == 1 {
+            return std::iter::once(0..n).collect();
+        }
+        let total: f64 = (0..n).map(&cost).sum();
+        let mut parts = Vec::with_capacity(self.size);
+        let (mut start, mut acc, mut i) = (0, 0.0, 0);
+        for r in 1..self.size {
+            let target = total * r as f64 / self.size as f64;
+            while i < n && acc < target {
+                acc += cost(i);
+                i += 1;
+            }
+            parts.push(start..i);
+            start = i;
+        }
+        parts.push(start..n);
+        parts
+    }
+
+    /// After each rank has filled its own range `parts[rank]` of `v`, give every rank all of
+    /// `v` (MPI all-gather; nothing to do on one rank).
+    pub fn share<T: Copy + Send>(&self, v: &mut [T], parts: &[Range<usize>]) {
+        if self.size == 1 {
+            return;
+        }
+        #[cfg(feature = "mpi")]
+        exchange::all_gather(v, parts, self.rank);
+        #[cfg(not(feature = "mpi"))]
+        unreachable!(
+            "more than one rank without the mpi feature ({parts:?}, {})",
+            v.len()
+        );
+    }
+
+    /// Each rank's `value`, in rank order (on one rank: `[value]`).
+    pub fn gather_each(&self, value: f64) -> Vec<f64> {
+        let mut all = vec![0.0; self.size];
+        all[self.rank] = value;
+        let parts: Vec<Range<usize>> = (0..self.size).map(|r| r..r + 1).collect();
+        self.share(&mut all, &parts);
+        all
+    }
+
+    /// Whether `flag` is raised on any rank (on one rank: `flag`).
+    pub fn any(&self, flag: bool) -> bool {
+        #[cfg(feature = "mpi")]
+        if self.size > 1 {
+            use mpi::collective::SystemOperation;
+            use mpi::traits::*;
+            let mut any = 0_i32;
+            mpi::topology::SimpleCommunicator::world().all_reduce_into(
+                &i32::from(flag),
+                &mut any,
+                SystemOperation::max(),
+            );
+            return any != 0;
+        }
+        flag
+    }
+
+    /// Combine the ranks' mixing figures (each of its own particles): the deepest penetration
+    /// and the count of mixed particles of each pair, the same on every rank (exact: a
+    /// maximum and an integer sum).
+    pub fn combine_mixing(&self, figures: &mut [PairMixing]) {
+        #[cfg(feature = "mpi")]
+        if self.size > 1 {
+            use mpi::collective::SystemOperation;
+            use mpi::traits::*;
+            let world = mpi::topology::SimpleCommunicator::world();
+            let deepest: Vec<f64> = figures.iter().map(|f| f.penetration).collect();
+            let mixed: Vec<u64> = figures.iter().map(|f| f.mixed).collect();
+            let (mut deepest_all, mut mixed_all) = (deepest.clone(), mixed.clone());
+            world.all_reduce_into(&deepest[..], &mut deepest_all[..], SystemOperation::max());
+            world.all_reduce_into(&mixed[..], &mut mixed_all[..], SystemOperation::sum());
+            for (f, (d, m)) in figures
+                .iter_mut()
+                .zip(deepest_all.into_iter().zip(mixed_all))
+            {
+                f.penetration = d;
+                f.mixed = m;
+            }
+        }
+        let _ = figures;
+    }
+
+    /// Stop every rank at once (after an error on this one), with `code`; on one rank, return.
+    pub fn abort(&self, code: i32) {
+        #[cfg(feature = "mpi")]
+        if self.size > 1 {
+            use mpi::topology::Communicator;
+            mpi::topology::SimpleCommunicator::world().abort(code);
+        }
+        let _ = code;
+    }
+}
+
+/// Fill `out[i] = f(i)` for i in `owned` (in parallel), `out` holding n entries; those outside
+/// `owned` are left as they are, for [`Ranks::share`] to fill.
+pub fn fill<T: Send + Default + Clone>(
+    out: &mut Vec<T>,
+    n: usize,
+    owned: &Range<usize>,
+    f: impl Fn(usize) -> T + Sync + Send,
+) {
+    out.resize(n, T::default());
+    let start = owned.start;
+    out[owned.clone()]
+        .par_iter_mut()
+        .enumerate()
+        .for_each(|(k, o)| *o = f(start + k));
+}
+
+/// Keeps MPI initialised for the life of the process (finalised when dropped).
+pub struct Session {
+    #[cfg(feature = "mpi")]
+    _universe: Option<mpi::environment::Universe>,
+}
+
+/// Initialise MPI where the program was started by an MPI launcher (mpirun, mpiexec, srun),
+/// so that a plain `strike run` of the MPI build stays a serial run that needs no launcher.
+pub fn start() -> Session {
+    #[cfg(feature = "mpi")]
+    {
+        let launched = [
+            "OMPI_COMM_WORLD_SIZE",
+            "PMI_SIZE",
+            "PMIX_RANK",
+            "MPI_LOCALNRANKS",
+        ]
+        .iter()
+        .any(|v| std::env::var_os(v).is_some());
+        // MPI is called from the main thread only; rayon's workers never call it.
+        let universe = launched
+            .then(|| mpi::initialize_with_threading(mpi::Threading::Funneled))
+            .flatten()
+            .map(|(u, _)| u);
+        Session {
+            _universe: universe,
+        }
+    }
+    #[cfg(not(feature = "mpi"))]
+    Session {}
+}
+
+#[cfg(feature = "mpi")]
+mod exchange {
+    use mpi::datatype::{DynBuffer, DynBufferMut, PartitionMut, UserDatatype};
+    use mpi::traits::*;
+    use std::ops::Range;
+
+    /// All-gather of the ranks' ranges of `v`, element by element as opaque bytes (the
+    /// records are plain data of this same program on every rank).
+    pub fn all_gather<T: Copy>(v: &mut [T], parts: &[Range<usize>], rank: usize) {
+        let world = mpi::topology::SimpleCommunicator::world();
+        let record = UserDatatype::contiguous(
+            std::mem::size_of::<T>() as mpi::Count,
+            &u8::equivalent_datatype(),
+        );
+        let count = |n: usize| mpi::Count::try_from(n).expect("fewer than 2³¹ particles a rank");
+        let mine: Vec<T> = v[parts[rank].clone()].to_vec();
+        let counts: Vec<mpi::Count> = parts.iter().map(|r| count(r.len())).collect();
+        let displs: Vec<mpi::Count> = parts.iter().map(|r| count(r.start)).collect();
+        // SAFETY: both buffers hold as many records of `record`'s size as the counts say, and
+        // a T is plain data (Copy), so its bytes may be copied between processes as they are.
+        unsafe {
+            let send = DynBuffer::from_raw(mine.as_ptr(), count(mine.len()), record.as_ref());
+            let mut recv = DynBufferMut::from_raw(v.as_mut_ptr(), count(v.len()), record.as_ref());
+            let mut part = PartitionMut::new(&mut recv, &counts[..], &displs[..]);
+            world.all_gather_varcount_into(&send, &mut part);
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// The ranges cover 0..n in order, and balance the weight.
+    #[test]
+    fn split_covers_and_balances() {
+        let ranks = Ranks { rank: 0, size: 3 };
+        let cost = |i: usize| if i < 500 { 100.0 } else { 10.0 };
+        let parts = ranks.split(1000, cost);
+        assert_eq!(parts.len(), 3);
+        assert_eq!(parts[0].start, 0);
+        assert_eq!(parts[2].end, 1000);
+        for w in parts.windows(2) {
+            assert_eq!(w[0].end, w[1].start);
+        }
+        let sum = |r: &Range<usize>| r.clone().map(cost).sum::<f64>();
+        let total: f64 = parts.iter().map(sum).sum();
+        for r in &parts {
+            assert!((sum(r) / total - 1.0 / 3.0).abs() < 0.01, "{parts:?}");
+        }
+        assert_eq!(
+            Ranks::SERIAL.split(7, |_| 1.0),
+            std::iter::once(0..7).collect::<Vec<_>>()
+        );
+    }
+}

@@ -1,0 +1,189 @@
+//! MPI runs are bit-identical to the serial run on any number of ranks, and a checkpoint
+//! restarts on another number of ranks bit for bit: the `mpi` build under `mpirun -n 1, 2, 3`
+//! (oversubscribed on a 2-core machine) against the default build run serially, on a contact
+//! case and on the CN-SPH sphere–plate (contact, symmetry ghosts, the correction and colour
+//! passes, full and partial searches, a reordering and the ranks' rebalancing).
+//!
+//! The test builds the `mpi` binary itself (tests/support/provision_mpi.sh, which installs
+//! OpenMPI where it is missing), in its own target directory.
+
+use std::path::{Path, PathBuf};
+use std::process::Command;
+use std::sync::OnceLock;
+
+/// The `mpi` build of strike, built once (under a file lock across test processes).
+fn mpi_strike() -> PathBuf {
+    static BIN: OnceLock<PathBuf> = OnceLock::new();
+    BIN.get_or_init(|| {
+        let tmp = Path::new(env!("CARGO_TARGET_TMPDIR"));
+        std::fs::create_dir_all(tmp).unwrap();
+        let lock = std::fs::File::create(tmp.join("mpi-build.lock")).unwrap();
+        lock.lock().unwrap();
+        let script = Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/support/provision_mpi.sh");
+        let out = Command::new("bash")
+            .arg(&script)
+            .arg(tmp.join("mpi-target"))
+            .output()
+            .unwrap_or_else(|e| panic!("cannot run {}: {e}", script.display()));
+        assert!(
+            out.status.success(),
+            "could not build strike with the mpi feature (needs OpenMPI and libclang, which the script installs with apt-get where it can):\n{}{}",
+            String::from_utf8_lossy(&out.stdout),
+            String::from_utf8_lossy(&out.stderr)
+        );
+        PathBuf::from(String::from_utf8(out.stdout).unwrap().trim())
+    })
+    .clone()
+}
+
+fn dir(name: &str) -> PathBuf {
+    let d = Path::new(env!("CARGO_TARGET_TMPDIR"))
+        .join("mpi")
+        .join(name);
+    let _ = std::fs::remove_dir_all(&d);
+    std::fs::create_dir_all(&d).unwrap();
+    d
+}
+
+/// An example deck with its bodies' spacing set to `spacing` (coarser: quick), in `dir`.
+fn deck(example: &str, spacing: f64, dir: &Path) -> PathBuf {
+    let text = std::fs::read_to_string(
+        Path::new(env!("CARGO_MANIFEST_DIR")).join(format!("examples/{example}.toml")),
+    )
+    .unwrap();
+    let text: String = text
+        .lines()
+        .map(|l| {
+            if l.trim_start().starts_with("spacing =") {
+                format!("spacing = {spacing:e}")
+            } else {
+                l.to_string()
+            }
+        })
+        .collect::<Vec<_>>()
+        .join("\n");
+    let path = dir.join(format!("{example}.toml"));
+    std::fs::write(&path, text).unwrap();
+    path
+}
+
+/// `strike run` of `deck` into `out` for `steps` steps: serially with the default build
+/// (ranks = 0), or under `mpirun -n ranks` with the mpi build; `resume` from a checkpoint.
+fn run(deck: &Path, out: &Path, steps: u64, ranks: usize, resume: Option<&Path>) -> String {
+    let strike = env!("CARGO_BIN_EXE_strike");
+    let mut cmd = if ranks == 0 {
+        Command::new(strike)
+    } else {
+        let mut c = Command::new("mpirun");
+        c.args(["--oversubscribe", "-n", &ranks.to_string()])
+            .arg(mpi_strike())
+            .env("OMPI_ALLOW_RUN_AS_ROOT", "1")
+            .env("OMPI_ALLOW_RUN_AS_ROOT_CONFIRM", "1");
+        c
+    };
+    cmd.arg("run").arg(deck).arg("--out").arg(out).args([
+        "--threads",
+        "1",
+        "--max-steps",
+        &steps.to_string(),
+        "--overwrite",
+    ]);
+    if let Some(r) = resume {
+        cmd.arg("--resume").arg(r);
+    }
+    let o = cmd.output().unwrap();
+    let text = format!(
+        "{}{}",
+        String::from_utf8_lossy(&o.stdout),
+        String::from_utf8_lossy(&o.stderr)
+    );
+    assert!(o.status.success(), "{ranks} ranks: {text}");
+    text
+}
+
+/// Every snapshot, the history and (`pvd`) the .pvd of run `a` are byte for byte those of
+/// run `b` (the summary and checkpoint also hold the wall time). Returns how many files were
+/// compared.
+fn same_outputs(a: &Path, b: &Path, pvd: bool) -> usize {
+    let mut compared = 0;
+    for entry in std::fs::read_dir(a).unwrap() {
+        let name = entry.unwrap().file_name().into_string().unwrap();
+        if !(name.ends_with(".vtp") || (pvd && name.ends_with(".pvd")) || name == "history.csv") {
+            continue;
+        }
+        let (x, y) = (
+            std::fs::read(a.join(&name)).unwrap(),
+            std::fs::read(b.join(&name)),
+        );
+        let y = y.unwrap_or_else(|e| panic!("{}: {e}", b.join(&name).display()));
+        assert!(
+            x == y,
+            "{name} differs between {} and {}",
+            a.display(),
+            b.display()
+        );
+        compared += 1;
+    }
+    compared
+}
+
+/// The serial run against 1, 2 and 3 ranks.
+fn ranks_match_serial(example: &str, spacing: f64, steps: u64) {
+    let d = dir(example);
+    let deck = deck(example, spacing, &d);
+    run(&deck, &d.join("serial"), steps, 0, None);
+    for ranks in 1..=3 {
+        let out = d.join(format!("ranks{ranks}"));
+        let log = run(&deck, &out, steps, ranks, None);
+        if ranks > 1 {
+            assert!(log.contains(&format!("{ranks} MPI ranks")), "{log}");
+        }
+        let n = same_outputs(&d.join("serial"), &out, true);
+        assert!(n >= 3, "only {n} files compared");
+    }
+}
+
+#[test]
+fn a_contact_case_on_1_2_3_ranks_is_the_serial_run_bit_for_bit() {
+    ranks_match_serial("hertz_spheres", 1.0e-3, 120);
+}
+
+#[test]
+fn sphere_plate_cn_on_1_2_3_ranks_and_a_restart_across_ranks_are_bit_identical() {
+    // 60 steps: full and partial searches, a reordering at step 50 and the ranks' rebalancing.
+    ranks_match_serial("sphere_plate_cn", 5.0e-5, 60);
+    // 3 ranks to step 30, then on 2 ranks from its checkpoint to step 60.
+    let d = Path::new(env!("CARGO_TARGET_TMPDIR"))
+        .join("mpi")
+        .join("sphere_plate_cn");
+    let deck = d.join("sphere_plate_cn.toml");
+    let out = d.join("restart");
+    run(&deck, &out, 30, 3, None);
+    run(&deck, &out, 60, 2, Some(&out.join("checkpoint.bin")));
+    // (Its .pvd also lists the snapshot the first part wrote where it stopped.)
+    let n = same_outputs(&d.join("serial"), &out, false);
+    assert!(n >= 3, "only {n} files compared");
+}
+
+/// The other commands refuse several ranks with a clear error (they would write the same
+/// files from every rank).
+#[test]
+fn other_commands_refuse_several_ranks() {
+    let d = dir("refuse");
+    let deck = deck("hertz_spheres", 1.0e-3, &d);
+    let o = Command::new("mpirun")
+        .args(["--oversubscribe", "-n", "2"])
+        .arg(mpi_strike())
+        .arg("check")
+        .arg(&deck)
+        .env("OMPI_ALLOW_RUN_AS_ROOT", "1")
+        .env("OMPI_ALLOW_RUN_AS_ROOT_CONFIRM", "1")
+        .output()
+        .unwrap();
+    let text = String::from_utf8_lossy(&o.stderr);
+    assert!(!o.status.success());
+    assert!(
+        text.contains("only `strike run` and `strike bench` run on several MPI ranks"),
+        "{text}"
+    );
+}
