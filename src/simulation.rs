@@ -91,6 +91,8 @@ pub struct Simulation<const D: usize> {
     /// next ones), and in the exchanges between ranks in all.
     busy: f64,
     exchanging: f64,
+    /// Step of the last comparison of the ranks' loads.
+    balanced: u64,
 }
 
 /// The scalar state of a run in progress, beside its particles: what a checkpoint keeps.
@@ -201,6 +203,10 @@ fn block_sums(
 
 /// Real particles are put back in cell order at least this often (steps), for memory locality.
 pub const REORDER_EVERY: u64 = 50;
+/// Under MPI, the ranks compare their loads this often (steps), and take new ranges where the
+/// slowest is past this multiple of the mean (see `Simulation::unbalanced`).
+const BALANCE_EVERY: u64 = 5;
+const IMBALANCE: f64 = 1.1;
 /// Verlet skin of the neighbour lists, as a fraction of the largest smoothing length.
 pub const SKIN: f64 = 0.1;
 
@@ -245,6 +251,7 @@ impl<const D: usize> Simulation<D> {
             parts: Vec::new(),
             busy: 0.0,
             exchanging: 0.0,
+            balanced: 0,
         })
     }
 
@@ -253,6 +260,21 @@ impl<const D: usize> Simulation<D> {
     pub fn distribute(&mut self, ranks: Ranks) {
         self.ranks = ranks;
         self.parts.clear();
+    }
+
+    /// Whether the ranks' loads have drifted apart since their ranges were set: every
+    /// `BALANCE_EVERY` steps they compare their time on their own shares, and past
+    /// `IMBALANCE` (the slowest over the mean) the next search is a full one, with new ranges
+    /// (which changes no result: see `neighbors`). Always false on one rank.
+    fn unbalanced(&mut self) -> bool {
+        if self.ranks.size() == 1 || self.state.step < self.balanced + BALANCE_EVERY {
+            return false;
+        }
+        self.balanced = self.state.step;
+        let times = self.ranks.gather_each(self.busy);
+        let mean = times.iter().sum::<f64>() / times.len() as f64;
+        let slowest = times.iter().copied().fold(0.0, f64::max);
+        slowest > IMBALANCE * mean
     }
 
     /// Seconds spent in the exchanges between ranks so far (0 on one rank).
@@ -281,6 +303,7 @@ impl<const D: usize> Simulation<D> {
     /// Advance one step, of at most `dt_max`. On instability the particles are left at t_n
     /// (the last good state) and the error names the particle, its body, place and cause.
     pub fn step(&mut self, dt_max: f64) -> Result<Diagnostics> {
+        let unbalanced = self.unbalanced();
         let p = &mut self.particles;
         integrate::predict_velocity(p, &self.model, self.state.dt_prev);
         // Ghosts and neighbour lists are rebuilt when the skin is used up (positions are those
@@ -290,7 +313,7 @@ impl<const D: usize> Simulation<D> {
         let wide = self.model.colour.is_some();
         search_radii(p, wide, &mut self.h_search);
         let reorder = self.state.step >= self.state.last_reorder + REORDER_EVERY;
-        let mut need = if reorder {
+        let mut need = if reorder || unbalanced {
             Refresh::Full
         } else {
             self.neighbors.refresh(&p.x, &self.h_search)
