@@ -985,6 +985,27 @@ mod tests {
     use crate::kernel::CubicSpline;
     use crate::particles::Tensor;
 
+    /// The pass over all real particles, without the colour law (`b`: CN-SPH's corrections;
+    /// empty: conventional SPH).
+    fn all_rates<const D: usize>(
+        p: &Particles<D>,
+        nl: &NeighborList,
+        model: &Model<D>,
+        b: &[Tensor<D>],
+    ) -> Rates<D> {
+        let mut out = Rates::default();
+        compute_rates(
+            CubicSpline,
+            p,
+            nl,
+            model,
+            (&[], b),
+            &(0..p.n_real),
+            &mut out,
+        );
+        out
+    }
+
     /// The AVX2 build of the pass adds the same numbers in the same order as the portable one,
     /// so a run gives the same bits on any x86-64 machine. Two bodies in contact with a welded
     /// third, artificial stress on, and a disordered state so that every term is non-zero.
@@ -1049,26 +1070,12 @@ type = "welded"
             states.iter().any(|s| s.coef > 0.0),
             "the colour law is at work"
         );
-        compute_rates_on(
-            CubicSpline,
-            &p,
-            &nl,
-            &model,
-            (&states, &[]),
-            &all,
-            &mut wide,
-            true,
-        );
-        compute_rates_on(
-            CubicSpline,
-            &p,
-            &nl,
-            &model,
-            (&states, &[]),
-            &all,
-            &mut portable,
-            false,
-        );
+        // The pass on AVX2 (`wide`) or portable, with CN-SPH's B (`b`, empty: conventional).
+        let pass = |b: &[Tensor<3>], out: &mut Rates<3>, wide: bool| {
+            compute_rates_on(CubicSpline, &p, &nl, &model, (&states, b), &all, out, wide);
+        };
+        pass(&[], &mut wide, true);
+        pass(&[], &mut portable, false);
         assert!(wide.particles.iter().any(|r| r.contact_force.norm() > 0.0));
         assert!(wide
             .particles
@@ -1088,26 +1095,8 @@ type = "welded"
             .iter()
             .any(|c| !c.fallback && c.b != Tensor::<3>::identity()));
         let b: Vec<Tensor<3>> = cw.iter().map(|c| c.b).collect();
-        compute_rates_on(
-            CubicSpline,
-            &p,
-            &nl,
-            &model,
-            (&states, &b),
-            &all,
-            &mut wide,
-            true,
-        );
-        compute_rates_on(
-            CubicSpline,
-            &p,
-            &nl,
-            &model,
-            (&states, &b),
-            &all,
-            &mut portable,
-            false,
-        );
+        pass(&b, &mut wide, true);
+        pass(&b, &mut portable, false);
         for (i, (a, b)) in wide.particles.iter().zip(&portable.particles).enumerate() {
             assert_eq!(a, b, "CN-SPH, particle {i}");
         }
@@ -1152,24 +1141,9 @@ shape = { type = "rectangle", min = [0.0, 0.0], max = [8.0e-3, 6.0e-3] }
             0
         );
         let b: Vec<Tensor<2>> = c.iter().map(|c| c.b).collect();
-        let (mut cn, mut plain) = (Rates::default(), Rates::default());
-        compute_rates(
-            CubicSpline,
-            &p,
-            &nl,
-            &model,
-            (&[], &b),
-            &(0..p.n_real),
-            &mut cn,
-        );
-        compute_rates(
-            CubicSpline,
-            &p,
-            &nl,
-            &model,
-            (&[], &[]),
-            &(0..p.n_real),
-            &mut plain,
+        let (cn, plain) = (
+            all_rates(&p, &nl, &model, &b),
+            all_rates(&p, &nl, &model, &[]),
         );
         let worst = |r: &Rates<2>| {
             r.particles
@@ -1226,16 +1200,7 @@ stiffness = 1.0
         assert_eq!(p.n_real, 2);
         let mut nl = NeighborList::default();
         nl.build(&p.x, &p.h, p.n_real, 0.0);
-        let mut rates = Rates::default();
-        compute_rates(
-            CubicSpline,
-            &p,
-            &nl,
-            &model,
-            (&[], &[]),
-            &(0..p.n_real),
-            &mut rates,
-        );
+        let rates = all_rates(&p, &nl, &model, &[]);
         let c = p.c[0];
         let expect = model.cfl * p.h[0] / (c + 1000.0 + 0.6 * model.alpha * c);
         assert!(rates.particles[0].neighbors == 1);

@@ -7,15 +7,7 @@
 set -euo pipefail
 target="$1"
 
-apt_install() {
-    local sudo=""
-    if [ "$(id -u)" != 0 ]; then
-        if command -v sudo >/dev/null 2>&1 && sudo -n true 2>/dev/null; then sudo="sudo -n"; else return 1; fi
-    fi
-    command -v apt-get >/dev/null 2>&1 || return 1
-    $sudo apt-get update -q >&2 &&
-        DEBIAN_FRONTEND=noninteractive $sudo apt-get install -y -q "$@" >&2
-}
+. "$(dirname "${BASH_SOURCE[0]}")/apt.sh"
 
 have_libclang() {
     ls /usr/lib/llvm-*/lib/libclang*.so* /usr/lib/x86_64-linux-gnu/libclang*.so* >/dev/null 2>&1

@@ -7,15 +7,7 @@
 set -euo pipefail
 venv="$1"
 
-apt_install() {
-    local sudo=""
-    if [ "$(id -u)" != 0 ]; then
-        if command -v sudo >/dev/null 2>&1 && sudo -n true 2>/dev/null; then sudo="sudo -n"; else return 1; fi
-    fi
-    command -v apt-get >/dev/null 2>&1 || return 1
-    $sudo apt-get update -q >&2 &&
-        DEBIAN_FRONTEND=noninteractive $sudo apt-get install -y -q "$@" >&2
-}
+. "$(dirname "${BASH_SOURCE[0]}")/apt.sh"
 
 if ! "$venv/bin/python" -c 'import sys' 2>/dev/null; then
     rm -rf "$venv"
