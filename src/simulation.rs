@@ -84,7 +84,7 @@ pub struct Simulation<const D: usize> {
     /// CN-SPH: the surface indicator λ_min of every particle, ghosts included.
     lambda: Vec<f64>,
     /// The ranks the passes are split over (see `ranks`), and each one's range of particles,
-    /// set at each search.
+    /// set at each full search.
     ranks: Ranks,
     parts: Vec<Range<usize>>,
     /// Seconds this rank spent on its own share since the ranges were set (to balance the
@@ -410,8 +410,8 @@ impl<const D: usize> Simulation<D> {
                 });
         }
         // The colour contact law (and CN-SPH's contact normal) needs every particle's colour
-        // state first.
-        self.colour.clear();
+        // state first (the pass overwrites the real particles' entries of the last step, and
+        // the ghosts' are appended anew).
         if physics::needs_colour_states(&self.model) {
             let (nl, model) = (&self.neighbors, &self.model);
             let surfaces = cn.then_some(colour::Surfaces {
@@ -691,6 +691,9 @@ fn rebalance<const D: usize>(
     (old, times): (&[Range<usize>], &[f64]),
     order: Option<&[usize]>,
 ) -> Vec<Range<usize>> {
+    if ranks.size() == 1 {
+        return ranks.split(n, |_| 0.0);
+    }
     let base = |k: usize| rates.get(k).map_or(0.0, |r| f64::from(r.neighbors)) + 8.0;
     // Seconds per unit of weight of each old range (1 where nothing was measured yet).
     let per: Vec<f64> = old
