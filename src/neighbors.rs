@@ -210,12 +210,6 @@ impl NeighborList {
         self.owned = Some(owned);
     }
 
-    /// Whether real particle i's list has been rebuilt at every step since it went dirty (see
-    /// [`NeighborList::refresh`]): a fast particle, whose search costs again at every step.
-    pub fn is_dirty(&self, i: usize) -> bool {
-        self.dirty.get(i).copied().unwrap_or(false)
-    }
-
     /// Whether the lists of chunk `ci` are built.
     fn chunk_owned(&self, ci: usize) -> bool {
         self.owned

@@ -2,16 +2,17 @@
 //! step is split between them.
 //!
 //! **Replicated state, split passes.** Every rank holds every particle and takes every step
-//! itself; the passes that cost (CN-SPH's corrections, the colour states and the rates) are
-//! split: each rank evaluates a contiguous range of particles in cell order (a space-filling
-//! curve through the blocks of cells, so a range is a compact piece of the bodies), the ranges
-//! weighted by neighbour count, and the ranks then exchange their results (all-gather). A
-//! particle's rates come from exactly the arithmetic of the serial run whichever rank computes
-//! them, and everything else (search, integration, sums, checks) is the serial code on the
-//! same data, so an MPI run is bit-identical to the serial one on any number of ranks, and a
-//! checkpoint restarts on any number. What it does not give yet is memory per rank falling
-//! with the ranks (each holds the whole state) or scaling past a few nodes: that needs halos
-//! in place of the all-gather (see the README's "Not yet").
+//! itself; the passes that cost are split: the neighbour lists, CN-SPH's corrections, the
+//! colour states, the rates and the mixing figures. Each rank evaluates a contiguous range of
+//! particles in cell order (a space-filling curve through the blocks of cells, so a range is a
+//! compact piece of the bodies), the ranges balanced by measured cost (see
+//! `simulation::rebalance`), and the ranks then exchange their results (all-gather; the mixing
+//! figures by exact reductions). A particle's results come from exactly the arithmetic of the
+//! serial run whichever rank computes them, and everything else (binning, integration, sums,
+//! checks) is the serial code on the same data, so an MPI run is bit-identical to the serial
+//! one on any number of ranks, and a checkpoint restarts on any number. What it does not give
+//! yet is memory per rank falling with the ranks (each holds the whole state) or scaling past
+//! a few ranks: that needs halos in place of the all-gather (see the README's "Not yet").
 //!
 //! Without the feature, or when the program was not started by an MPI launcher, there is one
 //! rank and nothing is exchanged.
