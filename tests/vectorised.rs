@@ -33,6 +33,10 @@ fn wide_instructions(disassembly: &str, name: &str) -> (usize, usize) {
 
 #[test]
 #[cfg(target_arch = "x86_64")]
+#[cfg_attr(
+    debug_assertions,
+    ignore = "counts the optimised build's instructions: run with --release"
+)]
 fn the_hot_passes_are_vectorised() {
     let out = Command::new("objdump")
         .args(["-d", "-C", "--no-show-raw-insn"])
