@@ -7,6 +7,8 @@
 //! The test builds the `mpi` binary itself (tests/support/provision_mpi.sh, which installs
 //! OpenMPI where it is missing), in its own target directory.
 
+mod support;
+
 use std::path::{Path, PathBuf};
 use std::process::Command;
 use std::sync::OnceLock;
@@ -127,6 +129,23 @@ fn same_outputs(a: &Path, b: &Path, pvd: bool) -> usize {
     compared
 }
 
+/// VTK's own reader (ParaView's) opens every snapshot of the series `pvd`.
+fn vtk_reads(pvd: &Path) {
+    let script = Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/vtk_check.py");
+    let out = Command::new(support::vtk_python())
+        .arg(script)
+        .arg(pvd)
+        .output()
+        .unwrap();
+    let stdout = String::from_utf8_lossy(&out.stdout);
+    assert!(
+        out.status.success() && stdout.starts_with("ok "),
+        "VTK's reader on {}: {stdout}{}",
+        pvd.display(),
+        String::from_utf8_lossy(&out.stderr)
+    );
+}
+
 /// The serial run against 1, 2 and 3 ranks.
 fn ranks_match_serial(example: &str, spacing: f64, steps: u64) {
     let d = dir(example);
@@ -137,6 +156,7 @@ fn ranks_match_serial(example: &str, spacing: f64, steps: u64) {
         let log = run(&deck, &out, steps, ranks, None);
         if ranks > 1 {
             assert!(log.contains(&format!("{ranks} MPI ranks")), "{log}");
+            vtk_reads(&out.join(format!("{example}.pvd")));
         }
         let n = same_outputs(&d.join("serial"), &out, true);
         assert!(n >= 3, "only {n} files compared");
