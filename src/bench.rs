@@ -17,8 +17,9 @@ pub struct BenchCase {
     pub name: String,
     pub dimension: usize,
     pub particles: usize,
-    /// Threads of each rank, and MPI ranks (1 without MPI).
+    /// Threads of each rank.
     pub threads: usize,
+    /// MPI ranks (1 without MPI).
     pub ranks: usize,
     pub steps: u64,
     pub wall_seconds: f64,
