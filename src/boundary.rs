@@ -150,6 +150,7 @@ fn mirror<const D: usize>(p: &mut Particles<D>, range: Range<usize>, k: usize, c
         &mut p.v,
         &mut p.vh,
         &mut p.a,
+        &mut p.dv,
         &mut p.u,
         &mut p.contact_force,
     ] {

@@ -82,9 +82,12 @@ pub struct Simulation {
     pub formulation: Formulation,
     /// h0 = smoothing_ratio × spacing (default 1.2).
     pub smoothing_ratio: f64,
-    /// Monaghan–Gingold α (default 1) and β (default 2).
+    /// Monaghan–Gingold α (default 1) and β (default 2): the values at a shock.
     pub viscosity_alpha: f64,
     pub viscosity_beta: f64,
+    /// The α the switch decays to away from shocks (default 0.5; α: no switch), see
+    /// `physics::viscosity`.
+    pub viscosity_alpha_min: f64,
     /// Gravity (m/s²), z = 0 in 2D.
     pub gravity: [f64; 3],
     /// h stays within [h_min_ratio, h_max_ratio] × h0 (defaults 0.5 and 2).
@@ -309,7 +312,10 @@ impl Case {
             ),
             (
                 "simulation.viscosity".into(),
-                format!("alpha {:?}, beta {:?}", s.viscosity_alpha, s.viscosity_beta),
+                format!(
+                    "alpha {:?}, beta {:?}, alpha_min {:?}",
+                    s.viscosity_alpha, s.viscosity_beta, s.viscosity_alpha_min
+                ),
             ),
             ("simulation.gravity".into(), format!("{:?}", s.gravity)),
             (

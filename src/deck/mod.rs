@@ -838,6 +838,7 @@ impl Ctx<'_> {
             None => 1.2,
         };
         let (mut viscosity_alpha, mut viscosity_beta) = (1.0, 2.0);
+        let mut viscosity_alpha_min = None;
         if let Some(v) = &s.viscosity {
             if let Some(a) = &v.alpha {
                 viscosity_alpha = self.non_negative(
@@ -853,7 +854,20 @@ impl Ctx<'_> {
                     "Monaghan–Gingold β ≥ 0, typically 2 for impact",
                 )?;
             }
+            if let Some(m) = &v.alpha_min {
+                let alpha = viscosity_alpha;
+                viscosity_alpha_min = Some(self.check(
+                    m,
+                    "simulation.viscosity.alpha_min",
+                    |x| (0.0..=alpha).contains(&x),
+                    &format!("must lie in [0, alpha] = [0, {alpha}]"),
+                    "the α the viscosity switch decays to away from shocks (default 0.5); \
+                     alpha_min = alpha keeps α constant",
+                )?);
+            }
         }
+        let viscosity_alpha_min = viscosity_alpha_min
+            .unwrap_or(crate::physics::viscosity::ALPHA_MIN.min(viscosity_alpha));
         let gravity = match &s.gravity {
             Some(g) => self.vector(
                 g,
@@ -927,6 +941,7 @@ impl Ctx<'_> {
                 smoothing_ratio,
                 viscosity_alpha,
                 viscosity_beta,
+                viscosity_alpha_min,
                 gravity,
                 h_min_ratio,
                 h_max_ratio,

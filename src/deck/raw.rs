@@ -174,6 +174,7 @@ pub struct Simulation {
 pub struct Viscosity {
     pub alpha: Num,
     pub beta: Num,
+    pub alpha_min: Num,
 }
 
 #[derive(Debug, serde::Deserialize)]

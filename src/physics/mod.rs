@@ -95,8 +95,11 @@ pub struct Model<const D: usize> {
     /// Prescribed velocity of each body (None: free).
     pub body_prescribed: Vec<Option<Vector<D>>>,
     pub pairs: PairTable,
+    /// The viscosity's α and β at a shock, and the α its switch decays to elsewhere (see
+    /// [`viscosity`]).
     pub alpha: f64,
     pub beta: f64,
+    pub alpha_min: f64,
     pub gravity: Vector<D>,
     pub cfl: f64,
     /// h0 / Δp.
@@ -302,6 +305,11 @@ struct Gather<const D: usize> {
     /// Initial spacing Δp = h0/ratio.
     dp: f64,
     v: [f64; D],
+    /// v + dv: the velocity of the continuity equation and the velocity gradient
+    /// ([`Particles::dv`]).
+    dv: [f64; D],
+    /// The viscosity's strength, α_i/α ([`Particles::alpha`], `viscosity::strength`).
+    alpha: f64,
     u: [f64; D],
     m: f64,
     /// V = m/ρ.
@@ -325,6 +333,8 @@ impl<const D: usize> Gather<D> {
             // is half the particle's own spacing) and f_ij = W_ij/W(Δp_avg) = 0.
             dp: 0.0,
             v: [0.0; D],
+            dv: [0.0; D],
+            alpha: 0.0,
             u: [0.0; D],
             m: 0.0,
             vol: 0.0,
@@ -421,6 +431,8 @@ fn compute_rates_on<const D: usize, K: Kernel>(
             failed: p.damage[i] >= 1.0,
             dp: p.h0[i] / ratio,
             v: arr(&p.v[i]),
+            dv: arr(&p.dv[i]),
+            alpha: viscosity::strength(p.alpha[i], model.alpha),
             u: arr(&p.u[i]),
             m: p.m[i],
             vol: p.m[i] / p.rho[i],
@@ -870,21 +882,26 @@ fn conserve_chunk<const D: usize, K: Kernel, const ART: bool, const CN: bool>(
         let v2 = if near { dot(&vij, &vij) } else { 0.0 };
         s.v2_max[l] = s.v2_max[l].max(v2);
         let mj = gj.m;
-        s.drho[l] += mj * dot(&vij, &grad_i);
+        // The material's rates take the velocity extrapolated to the half step ahead.
+        let wij: [f64; D] = std::array::from_fn(|k| vij[k] + (gi.dv[k] - gj.dv[k]));
+        s.drho[l] += mj * dot(&wij, &grad_i);
         for a in 0..D {
-            let va = vij[a] * gj.vol;
+            let va = wij[a] * gj.vol;
             for b in 0..D {
                 s.grad_v[a][b][l] -= va * grad_i[b];
             }
         }
+        // The pair's strength is the mean of its particles'; α and β follow it (see
+        // `viscosity`).
+        let strength = 0.5 * (gi.alpha + gj.alpha);
         let (pi, mu) = viscosity::monaghan_gingold(
             dot(&vij, &xij),
             r2,
             hij,
             0.5 * (gi.c + gj.c),
             0.5 * (gi.rho + gj.rho),
-            alpha,
-            beta,
+            alpha * strength,
+            beta * strength,
         );
         let mu = if near { mu } else { 0.0 };
         s.mu_max[l] = s.mu_max[l].max(-mu);
