@@ -2,10 +2,12 @@
 //! gather pass over each real particle's neighbours. Per pair, with x_ij = x_i − x_j,
 //! v_ij = v_i − v_j, h_ij = (h_i + h_j)/2 and ∇_i W_ij = (dW/dr) x_ij/r_ij:
 //!
-//! - continuity: dρ_i/dt = Σ_{j∈N_i} m_j v_ij·∇_i W_ij
-//! - velocity gradient: L_i = −Σ_{j∈N_i} V_j v_ij ⊗ ∇_i W_ij
+//! - continuity: dρ_i/dt = Σ_{j∈N_i} m_j w_ij·∇_i W_ij
+//! - velocity gradient: L_i = −Σ_{j∈N_i} V_j w_ij ⊗ ∇_i W_ij, with w = v + dv the velocity
+//!   at the step's middle (`integrate`, "Staggered material update"; the other terms take v)
 //! - momentum: dv_i/dt = Σ_{j∈N_i} m_j T_ij ∇_i W_ij + f_c,i/m_i + g,
-//!   T_ij = σ_i/ρ_i² + σ_j/ρ_j² − Π_ij I + A_ij
+//!   T_ij = σ_i/ρ_i² + σ_j/ρ_j² − Π_ij I + A_ij, Π_ij with the pair's α and β of the
+//!   viscosity's switch ([`viscosity`])
 //! - energy: de_i/dt = −½ Σ_{j∈N_i} m_j v_ij·(T_ij ∇_i W_ij), the pairwise form whose sum
 //!   Σ m_i de_i/dt is exactly minus the power of the internal forces, so total energy is
 //!   conserved by the spatial discretisation (DESIGN.md §2 allows it in place of σ:D/ρ);
@@ -309,8 +311,7 @@ struct Gather<const D: usize> {
     v: [f64; D],
     /// v + dv: the velocity of the continuity equation and the velocity gradient
     /// ([`Particles::dv`]). Single precision, as the viscosity's strength: both are
-    /// corrections, and the record then stays within 192 bytes, three cache lines, in 3D (at
-    /// 208 it cost the 2-thread cubes of `strike bench` 19 %).
+    /// corrections, and the record then stays at 192 bytes, three cache lines, in 3D.
     dv: [f32; D],
     /// The viscosity's strength, α_i/α ([`Particles::alpha`], `viscosity::strength`).
     alpha: f32,
