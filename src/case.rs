@@ -23,6 +23,18 @@ pub enum KernelKind {
     WendlandC2,
 }
 
+/// Which velocity advances the material (density, stress) over a step (see `integrate`,
+/// "Staggered material update").
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+pub enum MaterialUpdate {
+    /// The predicted whole-step velocity v^n: the validated default, anti-damped without
+    /// viscosity.
+    #[default]
+    WholeStep,
+    /// The velocity at the step's middle, v^{n+½}, extrapolated: the central difference's own.
+    MidStep,
+}
+
 /// Which SPH formulation the conservation equations use (see `physics::correction`).
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
 pub enum Formulation {
@@ -80,6 +92,8 @@ pub struct Simulation {
     pub max_steps: Option<u64>,
     pub kernel: KernelKind,
     pub formulation: Formulation,
+    /// Which velocity advances the material (default: the whole step's).
+    pub material_update: MaterialUpdate,
     /// h0 = smoothing_ratio × spacing (default 1.2).
     pub smoothing_ratio: f64,
     /// Monaghan–Gingold α (default 1) and β (default 2): the values at a shock.
@@ -304,6 +318,10 @@ impl Case {
             (
                 "simulation.formulation".into(),
                 format!("{:?}", s.formulation),
+            ),
+            (
+                "simulation.material_update".into(),
+                format!("{:?}", s.material_update),
             ),
             ("simulation.cfl".into(), format!("{:?}", s.cfl())),
             (

@@ -58,7 +58,8 @@ pub struct Particles<const D: usize> {
     pub a: Vec<Vector<D>>,
     /// What the continuity equation and the velocity gradient add to [`Particles::v`] (m/s):
     /// v + dv extrapolates the leapfrog velocity to the half step ahead, v^{n+½}, from the
-    /// last two accelerations (see `integrate`, "Staggered material update").
+    /// last two accelerations (see `integrate`, "Staggered material update"); zero unless the
+    /// deck asks for `material_update = "mid_step"`.
     pub dv: Vec<Vector<D>>,
     /// The artificial viscosity's α of the particle, between the deck's `alpha_min` and
     /// `alpha` (see `physics::viscosity`).

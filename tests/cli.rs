@@ -190,8 +190,8 @@ fn unstable_run_stops_with_a_reason() {
     std::fs::create_dir_all(&dir).unwrap();
     let deck = dir.join("unstable.toml");
     // A 20 km/s impact with no artificial viscosity: plain SPH cannot hold the shock and the
-    // particles scatter (the speed check trips; at 5 km/s the staggered material update now
-    // holds it).
+    // particles scatter (the speed check trips; at 5 km/s, with `material_update = "mid_step"`,
+    // the shock holds without viscosity).
     let text = r#"
 [simulation]
 dimension = 2

@@ -827,6 +827,18 @@ impl Ctx<'_> {
             },
             None => Formulation::Conventional,
         };
+        let material_update = match &s.material_update {
+            Some(f) => match self.choice(
+                f,
+                "simulation.material_update",
+                &["whole_step", "mid_step"],
+                "material update",
+            )? {
+                "mid_step" => crate::case::MaterialUpdate::MidStep,
+                _ => crate::case::MaterialUpdate::WholeStep,
+            },
+            None => crate::case::MaterialUpdate::WholeStep,
+        };
         let smoothing_ratio = match &s.smoothing_ratio {
             Some(r) => self.check(
                 r,
@@ -861,13 +873,13 @@ impl Ctx<'_> {
                     "simulation.viscosity.alpha_min",
                     |x| (0.0..=alpha).contains(&x),
                     &format!("must lie in [0, alpha] = [0, {alpha}]"),
-                    "the α the viscosity switch decays to away from shocks (default 0.5); \
-                     alpha_min = alpha keeps α constant",
+                    "the α the viscosity switch decays to away from shocks (default: alpha, no \
+                     switch; 0.5 with material_update = \"mid_step\")",
                 )?);
             }
         }
-        let viscosity_alpha_min = viscosity_alpha_min
-            .unwrap_or(crate::physics::viscosity::ALPHA_MIN.min(viscosity_alpha));
+        // No switch unless the deck asks for one (see `physics::viscosity`).
+        let viscosity_alpha_min = viscosity_alpha_min.unwrap_or(viscosity_alpha);
         let gravity = match &s.gravity {
             Some(g) => self.vector(
                 g,
@@ -938,6 +950,7 @@ impl Ctx<'_> {
                 max_steps,
                 kernel,
                 formulation,
+                material_update,
                 smoothing_ratio,
                 viscosity_alpha,
                 viscosity_beta,

@@ -161,6 +161,7 @@ pub struct Simulation {
     pub max_steps: Option<S<i64>>,
     pub kernel: Option<S<String>>,
     pub formulation: Option<S<String>>,
+    pub material_update: Option<S<String>>,
     pub smoothing_ratio: Num,
     pub viscosity: Option<Viscosity>,
     pub gravity: Option<S<Vec<f64>>>,

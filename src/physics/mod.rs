@@ -102,6 +102,8 @@ pub struct Model<const D: usize> {
     pub alpha: f64,
     pub beta: f64,
     pub alpha_min: f64,
+    /// Whether the material advances with the step's middle velocity (`integrate`).
+    pub mid_step: bool,
     pub gravity: Vector<D>,
     pub cfl: f64,
     /// h0 / Δp.

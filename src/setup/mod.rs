@@ -109,6 +109,7 @@ pub fn build<const D: usize>(case: &Case) -> Result<(Particles<D>, Model<D>)> {
         alpha: s.viscosity_alpha,
         beta: s.viscosity_beta,
         alpha_min: s.viscosity_alpha_min,
+        mid_step: s.material_update == crate::case::MaterialUpdate::MidStep,
         gravity: from3::<D>(s.gravity),
         cfl: s.cfl(),
         smoothing_ratio: s.smoothing_ratio,
