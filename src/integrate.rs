@@ -31,14 +31,15 @@
 //! (the default, `"whole_step"`), the stress lags the motion by half a step. For an
 //! oscillation of frequency ω that lag is a negative damping: each step multiplies its
 //! amplitude by about 1 + (ωΔt)²/4 (1.025 at ωΔt = 0.3, 1.08 at 0.5), and only the artificial
-//! viscosity held it (α = 0.5 did in the elastic bars, 0.2 did not). Without viscosity an elastic bar (`examples/bars_contact.toml`
-//! against a symmetry plane) blew up within 7 µs. But v^{n+½} needs the step's accelerations,
-//! which the one pass is computing, so continuity and the velocity gradient take it
-//! extrapolated from the last two, v + dv = v^{n−½} + Δt (2 aⁿ⁻¹ − aⁿ⁻²) (`Particles::dv`,
-//! carried in the pass's neighbour record). Its amplification stays at or below 1 up to
-//! ωΔt ≈ 0.85, past the highest frequency the SPH lattice carries at C_cfl = 0.3, where it
-//! damps only the shortest waves (|λ| = 0.996 at ωΔt = 0.3); the same bar without viscosity now
-//! keeps its energy within 1 % over 40 µs. The forces, the viscosity, the contact and the
+//! viscosity holds it (α = 0.5 did in the elastic bars, 0.2 did not). Without viscosity an
+//! elastic bar (`examples/bars_contact.toml` against a symmetry plane) blows up within 7 µs.
+//! But v^{n+½} needs the step's accelerations, which the one pass is computing, so continuity
+//! and the velocity gradient take it extrapolated from the last two,
+//! v + dv = v^{n−½} + Δt (2 aⁿ⁻¹ − aⁿ⁻²) (`Particles::dv`, carried in the pass's neighbour
+//! record). Its amplification stays at or below 1 up to ωΔt ≈ 0.85 and damps only the
+//! shortest waves (|λ| = 0.996 at ωΔt = 0.3); the same bar without viscosity keeps its energy
+//! within 1 % over 40 µs, at C_cfl = 0.3 (conventional) and 0.15 (CN-SPH)
+//! (`tests/verification_engine.rs`). The forces, the viscosity, the contact and the
 //! energy equation keep v: the energy exchange stays second-order accurate as above.
 //!
 //! Why it is not the default yet: the whole-step update's negative damping offsets part of the
