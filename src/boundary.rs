@@ -150,7 +150,6 @@ fn mirror<const D: usize>(p: &mut Particles<D>, range: Range<usize>, k: usize, c
         &mut p.v,
         &mut p.vh,
         &mut p.a,
-        &mut p.dv,
         &mut p.u,
         &mut p.contact_force,
     ] {

@@ -23,18 +23,6 @@ pub enum KernelKind {
     WendlandC2,
 }
 
-/// Which velocity advances the material (density, stress) over a step (see `integrate`,
-/// "Staggered material update").
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
-pub enum MaterialUpdate {
-    /// The predicted whole-step velocity v^n: the validated default, anti-damped without
-    /// viscosity.
-    #[default]
-    WholeStep,
-    /// The velocity at the step's middle, v^{n+½}, extrapolated: the central difference's own.
-    MidStep,
-}
-
 /// Which SPH formulation the conservation equations use (see `physics::correction`).
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
 pub enum Formulation {
@@ -92,16 +80,11 @@ pub struct Simulation {
     pub max_steps: Option<u64>,
     pub kernel: KernelKind,
     pub formulation: Formulation,
-    /// Which velocity advances the material (default: the whole step's).
-    pub material_update: MaterialUpdate,
     /// h0 = smoothing_ratio × spacing (default 1.2).
     pub smoothing_ratio: f64,
-    /// Monaghan–Gingold α (default 1) and β (default 2): the values at a shock.
+    /// Monaghan–Gingold α (default 1) and β (default 2).
     pub viscosity_alpha: f64,
     pub viscosity_beta: f64,
-    /// The α the switch decays to away from shocks (default 0.5; α: no switch), see
-    /// `physics::viscosity`.
-    pub viscosity_alpha_min: f64,
     /// Gravity (m/s²), z = 0 in 2D.
     pub gravity: [f64; 3],
     /// h stays within [h_min_ratio, h_max_ratio] × h0 (defaults 0.5 and 2).
@@ -319,10 +302,6 @@ impl Case {
                 "simulation.formulation".into(),
                 format!("{:?}", s.formulation),
             ),
-            (
-                "simulation.material_update".into(),
-                format!("{:?}", s.material_update),
-            ),
             ("simulation.cfl".into(), format!("{:?}", s.cfl())),
             (
                 "simulation.smoothing_ratio".into(),
@@ -330,10 +309,7 @@ impl Case {
             ),
             (
                 "simulation.viscosity".into(),
-                format!(
-                    "alpha {:?}, beta {:?}, alpha_min {:?}",
-                    s.viscosity_alpha, s.viscosity_beta, s.viscosity_alpha_min
-                ),
+                format!("alpha {:?}, beta {:?}", s.viscosity_alpha, s.viscosity_beta),
             ),
             ("simulation.gravity".into(), format!("{:?}", s.gravity)),
             (

@@ -24,35 +24,10 @@
 //! u = (v̄ − v_pred) k_n and the next pass adds −½ Σ m_j (u_i − u_j)·(T_ij ∇W) to e: internal
 //! and kinetic energy then exchange the same work to second order, at the cost of one dot
 //! product per pair and no extra neighbour pass.
-//!
-//! **Staggered material update** (`material_update = "mid_step"`; not yet the default). The
-//! central difference advances the material (ρ, S, b) over the step with the velocity at its
-//! middle, v^{n+½} (DESIGN.md §2: the constitutive update at t_{n+½}); with the whole-step v^n
-//! (the default, `"whole_step"`), the stress lags the motion by half a step. For an
-//! oscillation of frequency ω that lag is a negative damping: each step multiplies its
-//! amplitude by about 1 + (ωΔt)²/4 (1.025 at ωΔt = 0.3, 1.08 at 0.5), and only the artificial
-//! viscosity holds it (α = 0.5 did in the elastic bars, 0.2 did not). Without viscosity an
-//! elastic bar (`examples/bars_contact.toml` against a symmetry plane) blows up within 7 µs.
-//! But v^{n+½} needs the step's accelerations, which the one pass is computing, so continuity
-//! and the velocity gradient take it extrapolated from the last two,
-//! v + dv = v^{n−½} + Δt (2 aⁿ⁻¹ − aⁿ⁻²) (`Particles::dv`, carried in the pass's neighbour
-//! record). Its amplification stays at or below 1 up to ωΔt ≈ 0.85 and damps only the
-//! shortest waves (|λ| = 0.996 at ωΔt = 0.3); the same bar without viscosity keeps its energy
-//! within 1 % over 40 µs, at C_cfl = 0.3 (conventional) and 0.15 (CN-SPH)
-//! (`tests/verification_engine.rs`). The forces, the viscosity, the contact and the
-//! energy equation keep v: the energy exchange stays second-order accurate as above.
-//!
-//! Why it is not the default yet: the whole-step update's negative damping offsets part of the
-//! viscosity's heating, so with α = 1 the mid-step one parts the ±10 m/s bars of
-//! `examples/bars_contact.toml` 5.3 % slow at L/Δp = 100 (4.0 % before; 5 % asked). The cure is
-//! less viscosity away from shocks (`viscosity.alpha_min`, see `physics::viscosity`), but that
-//! moved the Taylor bar's footprint away from its reference with refinement. With α = 1 every
-//! other case reads within a few tenths of a percent of the whole-step figures (the Taylor
-//! bar's face −8.55 / −0.22 % at R0/Δp = 8 / 16, −8.46 / −0.20 % before).
 
 use crate::material::{radial_return, DamageState, Damaged};
 use crate::particles::{Particles, Tensor, Vector};
-use crate::physics::{viscosity, Model, Rates};
+use crate::physics::{Model, Rates};
 use crate::tensor::{equivalent_strain_rate, max_principal, out_of_plane, von_mises};
 use rayon::prelude::*;
 
@@ -186,7 +161,6 @@ pub fn advance<const D: usize>(
         .zip(p.damage[..n].par_iter_mut())
         .zip(p.plastic_work[..n].par_iter_mut())
         .zip(p.stretch[..n].par_iter_mut())
-        .zip(p.dv[..n].par_iter_mut().zip(p.alpha[..n].par_iter_mut()))
         .enumerate()
         .for_each(
             |(
@@ -194,24 +168,12 @@ pub fn advance<const D: usize>(
                 (
                     (
                         (
-                            (
-                                (
-                                    (
-                                        (
-                                            (((((((((vh, a), x), rho), e), s), eps_p), h), pr), c),
-                                            fc,
-                                        ),
-                                        u,
-                                    ),
-                                    eh,
-                                ),
-                                dmg,
-                            ),
-                            w_p,
+                            ((((((((((((vh, a), x), rho), e), s), eps_p), h), pr), c), fc), u), eh),
+                            dmg,
                         ),
-                        bb,
+                        w_p,
                     ),
-                    (dv, alpha),
+                    bb,
                 ),
             )| {
                 let b = body[i] as usize;
@@ -221,19 +183,10 @@ pub fn advance<const D: usize>(
                     Some(v0) => {
                         *a = Vector::<D>::zeros();
                         *vh = v0;
-                        *dv = Vector::<D>::zeros();
                     }
                     None => {
-                        let a_old = *a;
                         *a = rates.particles[i].acc;
                         *vh += *a * kick;
-                        // Next step's v + dv = v^{n+½} + Δt (2 aⁿ − aⁿ⁻¹), with
-                        // v = v^{n+½} + ½ Δt aⁿ the predictor (see the module doc).
-                        *dv = if model.mid_step {
-                            (*a * 1.5 - a_old) * dt
-                        } else {
-                            Vector::<D>::zeros()
-                        };
                     }
                 }
                 *u = ((v_old + *vh) * 0.5 - v_pred[i]) * kick;
@@ -243,14 +196,6 @@ pub fn advance<const D: usize>(
                 *rho = next_density(mat, *rho, rates.particles[i].drho * dt, *e, *dmg >= 1.0);
                 let p_eos = mat.eos.pressure(*rho, *e);
                 let grad_v = &rates.particles[i].grad_v;
-                *alpha = viscosity::relax(
-                    *alpha,
-                    (model.alpha_min, model.alpha),
-                    grad_v.trace(),
-                    *h,
-                    *c,
-                    dt,
-                );
                 let rate = equivalent_strain_rate(grad_v);
                 let mut d_eps = 0.0;
                 if mat.strength.reference_shear_modulus() > 0.0 {

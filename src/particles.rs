@@ -21,8 +21,6 @@ macro_rules! for_each_field {
             v,
             vh,
             a,
-            dv,
-            alpha,
             u,
             m,
             rho,
@@ -56,14 +54,6 @@ pub struct Particles<const D: usize> {
     pub vh: Vec<Vector<D>>,
     /// Acceleration of the last step (m/s²), for the velocity predictor.
     pub a: Vec<Vector<D>>,
-    /// What the continuity equation and the velocity gradient add to [`Particles::v`] (m/s):
-    /// v + dv extrapolates the leapfrog velocity to the half step ahead, v^{n+½}, from the
-    /// last two accelerations (see `integrate`, "Staggered material update"); zero unless the
-    /// deck asks for `material_update = "mid_step"`.
-    pub dv: Vec<Vector<D>>,
-    /// The artificial viscosity's α of the particle, between the deck's `alpha_min` and
-    /// `alpha` (see `physics::viscosity`).
-    pub alpha: Vec<f64>,
     /// Energy-correction displacement u = (v̄ − v_pred) Δt of the last step (m), v̄ the mean of
     /// the half-step velocities: see `integrate` (lagged energy correction).
     pub u: Vec<Vector<D>>,
@@ -116,7 +106,7 @@ impl<const D: usize> serde::Serialize for RealParticles<'_, D> {
         use serde::ser::SerializeStruct;
         let (p, n) = (self.0, self.0.n_real);
         // The fields of `Particles` in their order, then n_real.
-        let mut st = ser.serialize_struct("Particles", 24)?;
+        let mut st = ser.serialize_struct("Particles", 22)?;
         macro_rules! fields {
             ($($f:ident),*) => { $(st.serialize_field(stringify!($f), &p.$f[..n])?;)* };
         }
@@ -154,8 +144,6 @@ impl<const D: usize> Particles<D> {
         self.v.push(v);
         self.vh.push(v);
         self.a.push(Vector::<D>::zeros());
-        self.dv.push(Vector::<D>::zeros());
-        self.alpha.push(0.0);
         self.u.push(Vector::<D>::zeros());
         self.m.push(m);
         self.rho.push(rho);

@@ -458,27 +458,3 @@ fn absurd_snapshot_interval_is_refused() {
     let deck = format!("{GOOD}\n[output]\nsnapshot_interval = 1.0e-11\n");
     assert!(parse(&deck, "ok.toml").is_ok());
 }
-
-/// The viscosity switch's floor lies in [0, alpha]: above alpha is refused with the range.
-#[test]
-fn alpha_min_above_alpha() {
-    let deck = edit(
-        "end_time = 2.0e-7\n",
-        "end_time = 2.0e-7\nviscosity = { alpha = 0.5, beta = 1.0, alpha_min = 0.8 }\n",
-    );
-    let (message, help) = deck_error(&deck, "simulation.viscosity.alpha_min", 4);
-    assert!(message.contains("[0, 0.5]"), "{message}");
-    assert!(help.contains("no switch"), "{help}");
-    // At alpha_min = alpha the switch is off, and the deck is good.
-    let off = edit(
-        "end_time = 2.0e-7\n",
-        "end_time = 2.0e-7\nviscosity = { alpha = 0.5, beta = 1.0, alpha_min = 0.5 }\n",
-    );
-    assert_eq!(
-        parse(&off, "off.toml")
-            .unwrap()
-            .simulation
-            .viscosity_alpha_min,
-        0.5
-    );
-}

@@ -827,18 +827,6 @@ impl Ctx<'_> {
             },
             None => Formulation::Conventional,
         };
-        let material_update = match &s.material_update {
-            Some(f) => match self.choice(
-                f,
-                "simulation.material_update",
-                &["whole_step", "mid_step"],
-                "material update",
-            )? {
-                "mid_step" => crate::case::MaterialUpdate::MidStep,
-                _ => crate::case::MaterialUpdate::WholeStep,
-            },
-            None => crate::case::MaterialUpdate::WholeStep,
-        };
         let smoothing_ratio = match &s.smoothing_ratio {
             Some(r) => self.check(
                 r,
@@ -850,7 +838,6 @@ impl Ctx<'_> {
             None => 1.2,
         };
         let (mut viscosity_alpha, mut viscosity_beta) = (1.0, 2.0);
-        let mut viscosity_alpha_min = None;
         if let Some(v) = &s.viscosity {
             if let Some(a) = &v.alpha {
                 viscosity_alpha = self.non_negative(
@@ -866,20 +853,7 @@ impl Ctx<'_> {
                     "Monaghan–Gingold β ≥ 0, typically 2 for impact",
                 )?;
             }
-            if let Some(m) = &v.alpha_min {
-                let alpha = viscosity_alpha;
-                viscosity_alpha_min = Some(self.check(
-                    m,
-                    "simulation.viscosity.alpha_min",
-                    |x| (0.0..=alpha).contains(&x),
-                    &format!("must lie in [0, alpha] = [0, {alpha}]"),
-                    "the α the viscosity switch decays to away from shocks (default: alpha, no \
-                     switch; 0.5 with material_update = \"mid_step\")",
-                )?);
-            }
         }
-        // No switch unless the deck asks for one (see `physics::viscosity`).
-        let viscosity_alpha_min = viscosity_alpha_min.unwrap_or(viscosity_alpha);
         let gravity = match &s.gravity {
             Some(g) => self.vector(
                 g,
@@ -950,11 +924,9 @@ impl Ctx<'_> {
                 max_steps,
                 kernel,
                 formulation,
-                material_update,
                 smoothing_ratio,
                 viscosity_alpha,
                 viscosity_beta,
-                viscosity_alpha_min,
                 gravity,
                 h_min_ratio,
                 h_max_ratio,

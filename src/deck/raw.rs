@@ -161,7 +161,6 @@ pub struct Simulation {
     pub max_steps: Option<S<i64>>,
     pub kernel: Option<S<String>>,
     pub formulation: Option<S<String>>,
-    pub material_update: Option<S<String>>,
     pub smoothing_ratio: Num,
     pub viscosity: Option<Viscosity>,
     pub gravity: Option<S<Vec<f64>>>,
@@ -175,7 +174,6 @@ pub struct Simulation {
 pub struct Viscosity {
     pub alpha: Num,
     pub beta: Num,
-    pub alpha_min: Num,
 }
 
 #[derive(Debug, serde::Deserialize)]

@@ -84,7 +84,6 @@ fn full_3d_deck() {
     assert_eq!(s.kernel, KernelKind::CubicSpline);
     assert_eq!(s.smoothing_ratio, 1.2);
     assert_eq!((s.viscosity_alpha, s.viscosity_beta), (1.0, 2.0));
-    assert_eq!(s.viscosity_alpha_min, 1.0);
     assert_eq!(s.gravity, [0.0; 3]);
     assert_eq!((s.h_min_ratio, s.h_max_ratio), (0.5, 2.0));
     assert_eq!(s.smoothing_stretch, 1.25);
@@ -344,7 +343,6 @@ fn full_2d_deck() {
     assert_eq!(s.kernel, KernelKind::WendlandC2);
     assert_eq!(s.smoothing_ratio, 1.3);
     assert_eq!((s.viscosity_alpha, s.viscosity_beta), (0.5, 0.0));
-    assert_eq!(s.viscosity_alpha_min, 0.5);
     assert_eq!(s.gravity, [0.0, -9.8, 0.0]);
     assert_eq!((s.h_min_ratio, s.h_max_ratio), (0.25, 4.0));
     assert_eq!(s.smoothing_stretch, 1.0);

@@ -105,7 +105,7 @@ pub fn deviatoric_stress3<const D: usize>(particles: &Particles<D>, i: usize) ->
 }
 
 /// Point-data arrays, in file order: (name, VTK type, components).
-pub const POINT_DATA: [(&str, &str, usize); 15] = [
+pub const POINT_DATA: [(&str, &str, usize); 14] = [
     ("body", "Int32", 1),
     ("id", "Int32", 1),
     ("velocity", "Float64", 3),
@@ -120,7 +120,6 @@ pub const POINT_DATA: [(&str, &str, usize); 15] = [
     ("contact_force", "Float64", 3),
     ("mass", "Float64", 1),
     ("sound_speed", "Float64", 1),
-    ("viscosity_alpha", "Float64", 1),
 ];
 
 fn point_data<'a, const D: usize>(p: &'a Particles<D>) -> Vec<Array<'a>> {
@@ -158,7 +157,6 @@ fn point_data<'a, const D: usize>(p: &'a Particles<D>) -> Vec<Array<'a>> {
         }),
         scalar("mass", &p.m, n),
         scalar("sound_speed", &p.c, n),
-        scalar("viscosity_alpha", &p.alpha, n),
     ]
 }
 

@@ -2,12 +2,10 @@
 //! gather pass over each real particle's neighbours. Per pair, with x_ij = x_i − x_j,
 //! v_ij = v_i − v_j, h_ij = (h_i + h_j)/2 and ∇_i W_ij = (dW/dr) x_ij/r_ij:
 //!
-//! - continuity: dρ_i/dt = Σ_{j∈N_i} m_j w_ij·∇_i W_ij
-//! - velocity gradient: L_i = −Σ_{j∈N_i} V_j w_ij ⊗ ∇_i W_ij, with w = v + dv the velocity
-//!   at the step's middle (`integrate`, "Staggered material update"; the other terms take v)
+//! - continuity: dρ_i/dt = Σ_{j∈N_i} m_j v_ij·∇_i W_ij
+//! - velocity gradient: L_i = −Σ_{j∈N_i} V_j v_ij ⊗ ∇_i W_ij
 //! - momentum: dv_i/dt = Σ_{j∈N_i} m_j T_ij ∇_i W_ij + f_c,i/m_i + g,
-//!   T_ij = σ_i/ρ_i² + σ_j/ρ_j² − Π_ij I + A_ij, Π_ij with the pair's α and β of the
-//!   viscosity's switch ([`viscosity`])
+//!   T_ij = σ_i/ρ_i² + σ_j/ρ_j² − Π_ij I + A_ij
 //! - energy: de_i/dt = −½ Σ_{j∈N_i} m_j v_ij·(T_ij ∇_i W_ij), the pairwise form whose sum
 //!   Σ m_i de_i/dt is exactly minus the power of the internal forces, so total energy is
 //!   conserved by the spatial discretisation (DESIGN.md §2 allows it in place of σ:D/ρ);
@@ -97,13 +95,8 @@ pub struct Model<const D: usize> {
     /// Prescribed velocity of each body (None: free).
     pub body_prescribed: Vec<Option<Vector<D>>>,
     pub pairs: PairTable,
-    /// The viscosity's α and β at a shock, and the α its switch decays to elsewhere (see
-    /// [`viscosity`]).
     pub alpha: f64,
     pub beta: f64,
-    pub alpha_min: f64,
-    /// Whether the material advances with the step's middle velocity (`integrate`).
-    pub mid_step: bool,
     pub gravity: Vector<D>,
     pub cfl: f64,
     /// h0 / Δp.
@@ -279,8 +272,6 @@ struct Pass<'a, const D: usize> {
     /// Pressures (ghosts included): what a pair with a failed member passes on.
     pressure: &'a [f64],
     model: &'a Model<D>,
-    /// The viscosity's α and β at full strength (the model's, copied with the rest).
-    viscosity: (f64, f64),
 }
 
 /// Neighbours go through the conservation equations this many at a time, one lane each: the
@@ -311,12 +302,6 @@ struct Gather<const D: usize> {
     /// Initial spacing Δp = h0/ratio.
     dp: f64,
     v: [f64; D],
-    /// v + dv: the velocity of the continuity equation and the velocity gradient
-    /// ([`Particles::dv`]). Single precision, as the viscosity's strength: both are
-    /// corrections, and the record then stays at 192 bytes, three cache lines, in 3D.
-    dv: [f32; D],
-    /// The viscosity's strength, α_i/α ([`Particles::alpha`], `viscosity::strength`).
-    alpha: f32,
     u: [f64; D],
     m: f64,
     /// V = m/ρ.
@@ -340,8 +325,6 @@ impl<const D: usize> Gather<D> {
             // is half the particle's own spacing) and f_ij = W_ij/W(Δp_avg) = 0.
             dp: 0.0,
             v: [0.0; D],
-            dv: [0.0; D],
-            alpha: 0.0,
             u: [0.0; D],
             m: 0.0,
             vol: 0.0,
@@ -438,8 +421,6 @@ fn compute_rates_on<const D: usize, K: Kernel>(
             failed: p.damage[i] >= 1.0,
             dp: p.h0[i] / ratio,
             v: arr(&p.v[i]),
-            dv: std::array::from_fn(|k| p.dv[i][k] as f32),
-            alpha: viscosity::strength(p.alpha[i], model.alpha) as f32,
             u: arr(&p.u[i]),
             m: p.m[i],
             vol: p.m[i] / p.rho[i],
@@ -502,7 +483,6 @@ fn compute_rates_on<const D: usize, K: Kernel>(
         colour,
         pressure: &p.p,
         model,
-        viscosity: (model.alpha, model.beta),
     };
     assert!(
         !wide || wide_lanes(),
@@ -850,7 +830,7 @@ fn conserve_chunk<const D: usize, K: Kernel, const ART: bool, const CN: bool>(
         art,
         corr,
         sb,
-        model: _,
+        model,
         ..
     } = *pass;
     let gi = &gather[i];
@@ -864,7 +844,7 @@ fn conserve_chunk<const D: usize, K: Kernel, const ART: bool, const CN: bool>(
         [zero; LANES]
     };
     let g: [&Gather<D>; LANES] = std::array::from_fn(|l| &gather[js[l] as usize]);
-    let (alpha, beta) = pass.viscosity;
+    let (alpha, beta) = (model.alpha, model.beta);
     for l in 0..LANES {
         let gj = g[l];
         let xij: [f64; D] = std::array::from_fn(|k| gi.x[k] - gj.x[k]);
@@ -890,27 +870,21 @@ fn conserve_chunk<const D: usize, K: Kernel, const ART: bool, const CN: bool>(
         let v2 = if near { dot(&vij, &vij) } else { 0.0 };
         s.v2_max[l] = s.v2_max[l].max(v2);
         let mj = gj.m;
-        // The material's rates take the velocity extrapolated to the half step ahead.
-        let wij: [f64; D] =
-            std::array::from_fn(|k| vij[k] + (f64::from(gi.dv[k]) - f64::from(gj.dv[k])));
-        s.drho[l] += mj * dot(&wij, &grad_i);
+        s.drho[l] += mj * dot(&vij, &grad_i);
         for a in 0..D {
-            let va = wij[a] * gj.vol;
+            let va = vij[a] * gj.vol;
             for b in 0..D {
                 s.grad_v[a][b][l] -= va * grad_i[b];
             }
         }
-        // The pair's strength is the mean of its particles'; α and β follow it (see
-        // `viscosity`).
-        let strength = 0.5 * (f64::from(gi.alpha) + f64::from(gj.alpha));
         let (pi, mu) = viscosity::monaghan_gingold(
             dot(&vij, &xij),
             r2,
             hij,
             0.5 * (gi.c + gj.c),
             0.5 * (gi.rho + gj.rho),
-            alpha * strength,
-            beta * strength,
+            alpha,
+            beta,
         );
         let mu = if near { mu } else { 0.0 };
         s.mu_max[l] = s.mu_max[l].max(-mu);

@@ -108,8 +108,6 @@ pub fn build<const D: usize>(case: &Case) -> Result<(Particles<D>, Model<D>)> {
         pairs,
         alpha: s.viscosity_alpha,
         beta: s.viscosity_beta,
-        alpha_min: s.viscosity_alpha_min,
-        mid_step: s.material_update == crate::case::MaterialUpdate::MidStep,
         gravity: from3::<D>(s.gravity),
         cfl: s.cfl(),
         smoothing_ratio: s.smoothing_ratio,
@@ -130,8 +128,6 @@ pub fn build<const D: usize>(case: &Case) -> Result<(Particles<D>, Model<D>)> {
             KernelKind::WendlandC2 => ColourLaw::new::<D, _>(WendlandC2, ratio, &model.materials),
         });
     }
-    // The viscosity switch starts at full strength: impacts start with a velocity jump.
-    p.alpha.fill(model.alpha);
     Ok((p, model))
 }
 

@@ -683,8 +683,7 @@ fn half_pulse(rows: &[Row]) -> Result<(f64, f64, f64, f64, f64)> {
 /// at ∓10 m/s within 5 %, the pulse lasts 2L/c within 5 % at half its plateau, is never
 /// tensile and exactly zero once they part; energy within 1 %. CN-SPH's bars part 5.3 % slow
 /// at L/Δp = 100 (∓9.47 m/s) and within 5 % from L/Δp = 200: its speed is reported at 100,
-/// held from 200, and held to improve with refinement. (With `material_update = "mid_step"` and
-/// `viscosity.alpha_min = 0.5` they part 4.7 % slow at 100, see `physics::viscosity`.)
+/// held from 200, and held to improve with refinement.
 pub fn slow_bars(fine: bool) -> Result<Outcome> {
     let mut base = example("bars_contact")?;
     base.simulation.end_time = 40.0e-6;
