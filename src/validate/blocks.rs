@@ -347,7 +347,7 @@ law = "{law}"
         &p,
         &nl,
         &model,
-        (&states, &b),
+        (&states, &b, &[]),
         &(0..p.n_real),
         &mut rates,
     );
