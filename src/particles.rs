@@ -252,13 +252,15 @@ pub fn from3<const D: usize>(a: [f64; 3]) -> Vector<D> {
 /// particle; 2026-11-24) plus about 4 % for ghosts and the allocator. In 3D: the state
 /// (≈ 390 B), the neighbour list with its skin (≈ 70 × 4 B), the rate pass's neighbour records
 /// and results (2 × 176 B) and the search buffers (≈ 110 B): 1151 B at 10⁶ particles and 1154 B
-/// at 10⁷; CN-SPH adds B, (σ/ρ²)B and the correction pass's records, 1511 B at 10⁶. In 2D
-/// 771 B and 963 B (CN-SPH) at 5·10⁵.
+/// at 10⁷; CN-SPH adds B, (σ/ρ²)B and the correction pass's records, 1511 B at 10⁶ (since
+/// 2026-11-25 about 30 B less: the rate pass reads B from the correction's array instead of a
+/// copy; a CN-SPH cube of 10⁶ particles, 3 steps of `strike run`, peaked at 1.45 GB of resident
+/// memory against 1.48 GB before). In 2D 771 B and 963 B (CN-SPH) at 5·10⁵.
 pub fn estimated_bytes_per_particle(dimension: usize, corrected: bool) -> usize {
     match (dimension, corrected) {
         (2, false) => 800,
         (2, true) => 1000,
         (_, false) => 1200,
-        (_, true) => 1580,
+        (_, true) => 1550,
     }
 }
