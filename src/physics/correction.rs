@@ -245,7 +245,8 @@ fn moments<const D: usize, K: Kernel, const CHECK: bool>(
     let mut queue = [padding; BATCH];
     let mut queued = 0;
     let (xi, hi) = (pi.x, pi.h);
-    // 64 entries at a time, each one's bit of the support kept in a register.
+    // 64 entries at a time, each one's bit of the support kept in a register (the words past
+    // the second, of lists longer than a `Support` covers, are dropped).
     for (w, part) in list.chunks(64).enumerate() {
         let mut bits = 0u64;
         for (k, &j) in part.iter().enumerate() {
@@ -365,8 +366,10 @@ pub fn shepard<const D: usize, K: Kernel>(
 /// λ_min of A_i as [`Correction::lambda_min`] has it. λ_min is only ever compared with
 /// [`LAMBDA_MIN`] and [`LAMBDA_SURFACE`]: where Gershgorin's lower bound already clears both
 /// (the interior, most particles) it stands in for the exact value, whose trigonometric
-/// solution cost 7 % of a CN-SPH step, with the same outcome. Kept out of line: inlined, it
-/// cost the correction pass its vectorised lanes.
+/// solution cost 7 % of a CN-SPH step, with the same outcome; where the bound does not, but
+/// [`exceeds`] shows λ_min > [`LAMBDA_SURFACE`] (the layer beneath a surface), that threshold
+/// itself does, a lower bound on the same side of both. Only surface particles pay for the
+/// exact value. Kept out of line: inlined, it cost the correction pass its vectorised lanes.
 #[inline(never)]
 fn surface_indicator<const D: usize>(a: &Tensor<D>) -> f64 {
     let bound = gershgorin_lower_bound(a);
