@@ -80,9 +80,6 @@ pub struct Simulation<const D: usize> {
     h_search: Vec<f64>,
     /// CN-SPH: each particle's correction, and B of every particle, ghosts included.
     corrections: Vec<physics::correction::Correction<D>>,
-    /// CN-SPH: which list entries of each real particle lie in its support (see
-    /// [`physics::correction::Support`]).
-    support: Vec<Option<physics::correction::Support>>,
     corr: Vec<Tensor<D>>,
     /// CN-SPH: the surface indicator λ_min of every particle, ghosts included.
     lambda: Vec<f64>,
@@ -248,7 +245,6 @@ impl<const D: usize> Simulation<D> {
             colour: Vec::new(),
             h_search: Vec::new(),
             corrections: Vec::new(),
-            support: Vec::new(),
             corr: Vec::new(),
             lambda: Vec::new(),
             ranks: Ranks::SERIAL,
@@ -377,7 +373,6 @@ impl<const D: usize> Simulation<D> {
         // CN-SPH: the gradient corrections, in their own pass before the rates.
         self.corr.clear();
         self.lambda.clear();
-        self.support.clear();
         let mut fallbacks = 0;
         let cn = self.model.formulation == Formulation::Corrected;
         if cn {
@@ -398,8 +393,6 @@ impl<const D: usize> Simulation<D> {
             fallbacks = out.iter().filter(|c| c.fallback).count();
             self.stats.correction_fallbacks += fallbacks as u64;
             self.corr.extend(self.corrections.iter().map(|c| c.b));
-            self.support
-                .extend(self.corrections.iter().map(|c| c.support));
             self.lambda
                 .extend(self.corrections.iter().map(|c| c.lambda_min));
             self.ghosts
@@ -456,7 +449,9 @@ impl<const D: usize> Simulation<D> {
                 });
         }
         let (nl, model) = (&self.neighbors, &self.model);
-        let fields = (&self.colour[..], &self.corr[..], &self.support[..]);
+        // The corrections (and their supports) only where this step computed them.
+        let marks = if cn { &self.corrections[..] } else { &[][..] };
+        let fields = (&self.colour[..], &self.corr[..], marks);
         match self.kernel {
             KernelKind::CubicSpline => {
                 physics::compute_rates(CubicSpline, p, nl, model, fields, owned, &mut self.rates)

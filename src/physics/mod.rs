@@ -41,7 +41,6 @@ use crate::kernel::Kernel;
 use crate::material::Material;
 use crate::neighbors::NeighborList;
 use crate::particles::{Particles, Tensor, Vector};
-use correction::Support;
 use rayon::prelude::*;
 use std::ops::Range;
 
@@ -271,8 +270,9 @@ struct Pass<'a, const D: usize> {
     /// CN-SPH's B of every particle, ghosts included (empty: conventional SPH).
     corr: &'a [Tensor<D>],
     sb: &'a [Matrix<D>],
-    /// CN-SPH: which list entries of each real particle lie in its support (may be empty).
-    support: &'a [Option<Support>],
+    /// CN-SPH: each real particle's correction, whose [`correction::Support`] marks the list entries in
+    /// its support (may be empty).
+    marks: &'a [correction::Correction<D>],
     /// Whether any particle is fully damaged (pairs with one need [`tension_cut`]).
     any_failed: bool,
     colour: &'a [ColourState],
@@ -389,11 +389,14 @@ pub fn compute_rates<const D: usize, K: Kernel>(
 
 /// What [`compute_rates`] reads besides the particles: the colour-law state of every particle,
 /// ghosts included (empty where no pair of bodies uses the colour law), CN-SPH's B of every
-/// particle, ghosts included (empty: conventional SPH), and CN-SPH's [`Support`] of each real
-/// particle from the correction pass of the same step (may be empty: the pass then tests the
-/// whole list).
-pub type PassFields<'a, const D: usize> =
-    (&'a [ColourState], &'a [Tensor<D>], &'a [Option<Support>]);
+/// particle, ghosts included (empty: conventional SPH), and CN-SPH's corrections of the real
+/// particles from the correction pass of the same step, for their [`correction::Support`] (may be empty:
+/// the pass then tests the whole list).
+pub type PassFields<'a, const D: usize> = (
+    &'a [ColourState],
+    &'a [Tensor<D>],
+    &'a [correction::Correction<D>],
+);
 
 /// [`compute_rates`], on 256-bit vectors (`wide`, where [`wide_lanes`]) or portable code.
 #[allow(clippy::too_many_arguments)]
@@ -402,7 +405,7 @@ fn compute_rates_on<const D: usize, K: Kernel>(
     p: &Particles<D>,
     nl: &NeighborList,
     model: &Model<D>,
-    (colour, corr, support): PassFields<D>,
+    (colour, corr, marks): PassFields<D>,
     owned: &Range<usize>,
     out: &mut Rates<D>,
     wide: bool,
@@ -475,13 +478,13 @@ fn compute_rates_on<const D: usize, K: Kernel>(
         out.art.push(Tensor::<D>::zeros());
     }
     // Only the pass over marked supports asks (the filter tests each pair's members).
-    let any_failed = !support.is_empty() && p.damage.par_iter().any(|&d| d >= 1.0);
+    let any_failed = !marks.is_empty() && p.damage.par_iter().any(|&d| d >= 1.0);
     let pass = Pass {
         gather: &out.gather,
         art: &out.art,
         corr,
         sb: &out.sb,
-        support,
+        marks,
         any_failed,
         colour,
         pressure: &p.p,
@@ -653,7 +656,7 @@ fn particle_rates<const D: usize, K: Kernel, const ART: bool, const CN: bool>(
     // with neighbours of its own body only): they are queued in list order, as the filter
     // below would queue them, with no test.
     let marked = if CN {
-        pass.support.get(i).copied().flatten()
+        pass.marks.get(i).and_then(|c| c.support)
     } else {
         None
     };
@@ -1161,8 +1164,7 @@ type = "welded"
         let mut marked = Vec::new();
         correction::corrections_on(CubicSpline, &p, &nl, joined, &all, &mut marked, true);
         assert_eq!(marked.iter().map(|c| c.b).collect::<Vec<_>>(), b);
-        let support: Vec<_> = marked.iter().map(|c| c.support).collect();
-        let n_marked = support.iter().filter(|s| s.is_some()).count();
+        let n_marked = marked.iter().filter(|c| c.support.is_some()).count();
         assert!(n_marked > p.n_real / 2, "{n_marked} of {}", p.n_real);
         for wide in [true, false] {
             let (mut filtered, mut with) = (Rates::default(), Rates::default());
@@ -1177,7 +1179,7 @@ type = "welded"
                 &mut filtered,
                 wide,
             );
-            let fields = (&states[..], &b[..], &support[..]);
+            let fields = (&states[..], &b[..], &marked[..]);
             compute_rates_on(CubicSpline, &p, &nl, &model, fields, &all, &mut with, wide);
             assert!(filtered.particles.iter().any(|r| r.acc.norm() > 0.0));
             for (i, (a, b)) in filtered.particles.iter().zip(&with.particles).enumerate() {
