@@ -28,7 +28,9 @@
 use crate::material::{radial_return, DamageState, Damaged};
 use crate::particles::{Particles, Tensor, Vector};
 use crate::physics::{Model, Rates};
-use crate::tensor::{equivalent_strain_rate, max_principal, out_of_plane, von_mises};
+use crate::tensor::{
+    equivalent_strain_rate, max_principal, max_principal_bound, out_of_plane, von_mises,
+};
 use rayon::prelude::*;
 
 /// Predict v^n = v^{n−½} + ½ Δt_{n−1} a^{n−1} for the real particles (prescribed bodies keep
@@ -214,25 +216,37 @@ pub fn advance<const D: usize>(
                     // yield surface: σ_eq = Y).
                     *w_p += von_mises(s) * d / *rho;
                 }
+                // Most particles at most steps grow no damage: they are told by a bound of σ1,
+                // before the eigenvalue and the temperature are computed; and where only the
+                // plastic strain's models act, σ1 is left at its bound (see `DamageState`).
                 if !mat.damage.is_empty() && *dmg < 1.0 {
                     let sigma = *s - Tensor::<D>::identity() * p_eos;
-                    let st = mat.strength_state(*rho, *e, (*eps_p, *w_p), rate, p_eos);
-                    let volume = m[i] / *rho;
-                    let state = DamageState {
-                        sigma_1: max_principal(&sigma, out_of_plane(s) - p_eos),
-                        p: p_eos,
-                        sigma_eq: von_mises(s),
-                        d_eps_p: d_eps,
-                        rate,
-                        t_star: mat.strength.homologous_temperature(&st),
-                        c: *c,
-                        size: if D == 2 { volume.sqrt() } else { volume.cbrt() },
-                    };
-                    for model in &mat.damage {
-                        *dmg = model.grow(&state, *dmg, dt);
-                    }
-                    if *dmg >= 1.0 {
-                        *s = Tensor::<D>::zeros();
+                    let zz = out_of_plane(s) - p_eos;
+                    let bound = max_principal_bound(&sigma, zz);
+                    let idle = |b: f64, d: f64| mat.damage.iter().all(|model| model.idle(b, d));
+                    if !idle(bound, d_eps) {
+                        let st = mat.strength_state(*rho, *e, (*eps_p, *w_p), rate, p_eos);
+                        let state = DamageState {
+                            sigma_1: if idle(bound, 0.0) {
+                                bound
+                            } else {
+                                max_principal(&sigma, zz)
+                            },
+                            p: p_eos,
+                            sigma_eq: von_mises(s),
+                            d_eps_p: d_eps,
+                            rate,
+                            t_star: mat.strength.homologous_temperature(&st),
+                            c: *c,
+                            volume: m[i] / *rho,
+                            dimension: D,
+                        };
+                        for model in &mat.damage {
+                            *dmg = model.grow(&state, *dmg, dt);
+                        }
+                        if *dmg >= 1.0 {
+                            *s = Tensor::<D>::zeros();
+                        }
                     }
                 }
                 // b stays the identity (λ_max = 1) in a material that does not flow.

@@ -44,6 +44,23 @@ pub fn max_principal<const D: usize>(sigma: &Tensor<D>, zz: f64) -> f64 {
     }
 }
 
+/// An upper bound of [`max_principal`] by Gershgorin's discs, max_a (σ_aa + Σ_{b≠a} |σ_ab|)
+/// (and σ_zz in 2D): no square root or trigonometry, for the tests that only ask whether the
+/// largest principal stress can pass a threshold.
+pub fn max_principal_bound<const D: usize>(sigma: &Tensor<D>, zz: f64) -> f64 {
+    let mut top = if D == 2 { zz } else { f64::NEG_INFINITY };
+    for a in 0..D {
+        let mut disc = sigma[(a, a)];
+        for b in 0..D {
+            if b != a {
+                disc += sigma[(a, b)].abs();
+            }
+        }
+        top = top.max(disc);
+    }
+    top
+}
+
 /// Eigen-decomposition of a symmetric D×D matrix by cyclic Jacobi rotations:
 /// returns (eigenvalues, eigenvectors as columns), A = Q diag(λ) Qᵀ. Exact to round-off for
 /// the 2×2 and 3×3 stresses it is used on.
@@ -92,6 +109,20 @@ pub fn symmetric_eigen<const D: usize>(a: &Tensor<D>) -> ([f64; D], Tensor<D>) {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    proptest::proptest! {
+        /// Gershgorin's bound is never below the largest principal value, 2D (zz counted) and
+        /// 3D, and is it for a diagonal stress.
+        #[test]
+        fn principal_bound_is_above(c in proptest::collection::vec(-5.0f64..5.0, 7)) {
+            let a = Tensor::<3>::new(c[0], c[3], c[4], c[3], c[1], c[5], c[4], c[5], c[2]);
+            proptest::prop_assert!(max_principal_bound(&a, 0.0) >= max_principal(&a, 0.0) - 1e-12);
+            let b = Tensor::<2>::new(c[0], c[3], c[3], c[1]);
+            proptest::prop_assert!(max_principal_bound(&b, c[6]) >= max_principal(&b, c[6]) - 1e-12);
+            let d = Tensor::<3>::from_diagonal(&nalgebra::Vector3::new(c[0], c[1], c[2]));
+            proptest::prop_assert_eq!(max_principal_bound(&d, 0.0), c[0].max(c[1]).max(c[2]));
+        }
+    }
 
     #[test]
     fn largest_principal_value_and_strain_rate() {

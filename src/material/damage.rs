@@ -33,6 +33,8 @@ use super::params::{Param, ParamError, Parameters, Valid};
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct DamageState {
     /// Largest principal stress of −p I + S with the EOS's undamaged pressure (tension > 0).
+    /// Where every model is [`Damage::idle`] at Gershgorin's upper bound of it (with no plastic
+    /// strain), that bound instead: no model's growth then depends on the value.
     pub sigma_1: f64,
     /// Undamaged pressure (Pa).
     pub p: f64,
@@ -46,13 +48,32 @@ pub struct DamageState {
     pub t_star: f64,
     /// Longitudinal sound speed (m/s).
     pub c: f64,
-    /// The particle's spacing (m): V^(1/D).
-    pub size: f64,
+    /// The particle's volume V (m³; m² in 2D).
+    pub volume: f64,
+    /// The number of dimensions D.
+    pub dimension: usize,
+}
+
+impl DamageState {
+    /// The particle's spacing V^(1/D) (m).
+    pub fn size(&self) -> f64 {
+        if self.dimension == 2 {
+            self.volume.sqrt()
+        } else {
+            self.volume.cbrt()
+        }
+    }
 }
 
 /// A damage model: the damage after a step of dt from damage d.
 pub trait Damage: Send + Sync + std::fmt::Debug {
     fn grow(&self, st: &DamageState, d: f64, dt: f64) -> f64;
+
+    /// Whether [`Damage::grow`] surely leaves the damage as it is for a particle whose largest
+    /// principal stress is at most `sigma_1_bound` and which gained `d_eps_p` of plastic strain:
+    /// then the step need not build its [`DamageState`] (an eigenvalue, a cube root, the
+    /// temperature), which most particles in an impact do not need at most steps.
+    fn idle(&self, sigma_1_bound: f64, d_eps_p: f64) -> bool;
 }
 
 /// Spall: see the module doc.
@@ -78,8 +99,12 @@ impl Damage for Spall {
         if st.sigma_1 <= self.strength || d >= 1.0 {
             return d;
         }
-        let r = d.cbrt() + CRACK_SPEED * st.c * dt / (0.5 * st.size);
+        let r = d.cbrt() + CRACK_SPEED * st.c * dt / (0.5 * st.size());
         r.min(1.0).powi(3)
+    }
+
+    fn idle(&self, sigma_1_bound: f64, _d_eps_p: f64) -> bool {
+        sigma_1_bound <= self.strength
     }
 }
 
@@ -169,6 +194,10 @@ impl Damage for JohnsonCookFailure {
         let eps_f = self.failure_strain(-st.p / st.sigma_eq, st.rate, st.t_star);
         (d + st.d_eps_p / eps_f).min(1.0)
     }
+
+    fn idle(&self, _sigma_1_bound: f64, d_eps_p: f64) -> bool {
+        d_eps_p <= 0.0
+    }
 }
 
 /// Scales a strength model's yield stress by (1 − D) (see the module doc).
@@ -197,6 +226,23 @@ impl super::Strength for Damaged<'_> {
             self.keep * self.inner.hardening_modulus(st)
         }
     }
+    fn state_factor(&self, st: &super::StrengthState) -> f64 {
+        self.inner.state_factor(st)
+    }
+    fn yield_stress_scaled(&self, st: &super::StrengthState, k: f64) -> f64 {
+        if self.keep <= 0.0 {
+            0.0
+        } else {
+            self.keep * self.inner.yield_stress_scaled(st, k)
+        }
+    }
+    fn hardening_modulus_scaled(&self, st: &super::StrengthState, k: f64) -> f64 {
+        if self.keep <= 0.0 {
+            0.0
+        } else {
+            self.keep * self.inner.hardening_modulus_scaled(st, k)
+        }
+    }
     fn homologous_temperature(&self, st: &super::StrengthState) -> f64 {
         self.inner.homologous_temperature(st)
     }
@@ -216,7 +262,8 @@ mod tests {
             rate: 0.0,
             t_star: 0.0,
             c: 5000.0,
-            size: 1e-4,
+            volume: 1e-12,
+            dimension: 3,
         }
     }
 
@@ -231,6 +278,41 @@ mod tests {
         assert_eq!(s.grow(&state(1.5e9), half, 0.5 * crossing), 1.0);
         // Once grown it stays, also in compression.
         assert_eq!(s.grow(&state(-5e9), 0.3, 1e-6), 0.3);
+    }
+
+    /// A model that says it is idle leaves the damage as it is, whatever σ1 below the bound
+    /// it was given; and each model is not idle where it acts (the shortcut can fire both ways).
+    #[test]
+    fn idle_models_grow_nothing() {
+        let spall = Spall { strength: 1e9 };
+        let jc = JohnsonCookFailure::from_pairs(&[("d1", 0.05), ("d2", 3.44), ("d3", -2.12)]);
+        let models: [&dyn Damage; 2] = [&spall, &jc];
+        for bound in [-2e9, 0.5e9, 1e9, 1.5e9] {
+            for d_eps_p in [0.0, 0.01] {
+                for model in models {
+                    if !model.idle(bound, d_eps_p) {
+                        continue;
+                    }
+                    for sigma_1 in [bound - 1e9, bound] {
+                        let st = DamageState {
+                            sigma_eq: 1e9,
+                            d_eps_p,
+                            ..state(sigma_1)
+                        };
+                        assert_eq!(model.grow(&st, 0.2, 1e-6), 0.2, "{model:?} at {bound}");
+                    }
+                }
+            }
+        }
+        assert!(spall.idle(1e9, 1.0) && !spall.idle(1.01e9, 0.0));
+        assert!(jc.idle(5e9, 0.0) && !jc.idle(-5e9, 1e-6));
+        let st = DamageState {
+            sigma_eq: 1e9,
+            d_eps_p: 1e-3,
+            ..state(0.0)
+        };
+        assert!(jc.grow(&st, 0.2, 1e-6) > 0.2);
+        assert!(spall.grow(&state(1.01e9), 0.2, 1e-6) > 0.2);
     }
 
     #[test]
@@ -255,7 +337,8 @@ mod tests {
             rate: 1e3,
             t_star: 0.3 / 0.61,
             c: 5000.0,
-            size: 1e-4,
+            volume: 1e-12,
+            dimension: 3,
         };
         let mut d = 0.0;
         for _ in 0..4 {

@@ -167,11 +167,23 @@ impl Strength for JohnsonCook {
     }
 
     fn yield_stress(&self, st: &StrengthState) -> f64 {
-        let eps = st.eps_p.max(0.0);
-        ((self.a + self.b * eps.powf(self.n)) * self.factors(st)).max(0.0)
+        self.yield_stress_scaled(st, self.factors(st))
     }
 
     fn hardening_modulus(&self, st: &StrengthState) -> f64 {
+        self.hardening_modulus_scaled(st, self.factors(st))
+    }
+
+    fn state_factor(&self, st: &StrengthState) -> f64 {
+        self.factors(st)
+    }
+
+    fn yield_stress_scaled(&self, st: &StrengthState, k: f64) -> f64 {
+        let eps = st.eps_p.max(0.0);
+        ((self.a + self.b * eps.powf(self.n)) * k).max(0.0)
+    }
+
+    fn hardening_modulus_scaled(&self, st: &StrengthState, k: f64) -> f64 {
         let eps = st.eps_p.max(0.0);
         let slope = if eps > 0.0 {
             self.b * self.n * eps.powf(self.n - 1.0)
@@ -182,7 +194,7 @@ impl Strength for JohnsonCook {
         } else {
             0.0
         };
-        slope * self.factors(st).max(0.0)
+        slope * k.max(0.0)
     }
 
     fn homologous_temperature(&self, st: &StrengthState) -> f64 {
@@ -213,6 +225,26 @@ mod tests {
             ("melt_temperature", 1813.15),
             ("specific_heat", 460.0),
         ])
+    }
+
+    /// The return's factored calls give the model's own numbers, bit for bit.
+    #[test]
+    fn factored_calls_are_the_same_numbers() {
+        let jc = steel();
+        for (eps_p, rate, w_p) in [(0.0, 0.0, 0.0), (0.3, 1e4, 1e5), (1.2, 0.5, 3e5)] {
+            let st = StrengthState {
+                eps_p,
+                rate,
+                w_p,
+                ..StrengthState::REFERENCE
+            };
+            let k = jc.state_factor(&st);
+            assert_eq!(jc.yield_stress_scaled(&st, k), jc.yield_stress(&st));
+            assert_eq!(
+                jc.hardening_modulus_scaled(&st, k),
+                jc.hardening_modulus(&st)
+            );
+        }
     }
 
     #[test]

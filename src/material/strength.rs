@@ -42,6 +42,22 @@ pub trait Strength: Send + Sync + std::fmt::Debug {
     fn yield_stress(&self, st: &StrengthState) -> f64;
     /// ∂Y/∂εp at the state (Pa); may be infinite (a power law at εp = 0).
     fn hardening_modulus(&self, st: &StrengthState) -> f64;
+    /// A factor of Y and ∂Y/∂εp that does not depend on εp (Johnson–Cook's rate and thermal
+    /// factors), for [`Strength::yield_stress_scaled`] and [`Strength::hardening_modulus_scaled`]:
+    /// the radial return's iterations change only εp, so it is computed once a return instead
+    /// of twice an iteration. 1 by default (the model has none).
+    fn state_factor(&self, _st: &StrengthState) -> f64 {
+        1.0
+    }
+    /// [`Strength::yield_stress`], given the [`Strength::state_factor`] k of the same rate,
+    /// temperature and pressure: the same number.
+    fn yield_stress_scaled(&self, st: &StrengthState, _k: f64) -> f64 {
+        self.yield_stress(st)
+    }
+    /// [`Strength::hardening_modulus`], given k as in [`Strength::yield_stress_scaled`].
+    fn hardening_modulus_scaled(&self, st: &StrengthState, _k: f64) -> f64 {
+        self.hardening_modulus(st)
+    }
     /// Homologous temperature T* = (T − T_room)/(T_melt − T_room) in [0, 1] (1: molten, no
     /// deviatoric stress), for the damage models; 0 for a model without temperature.
     fn homologous_temperature(&self, _st: &StrengthState) -> f64 {
@@ -121,7 +137,8 @@ pub fn radial_return<const D: usize>(
     if strength.homologous_temperature(st) >= 1.0 {
         return (Tensor::<D>::zeros(), 0.0);
     }
-    let y = strength.yield_stress(st);
+    let k = strength.state_factor(st);
+    let y = strength.yield_stress_scaled(st, k);
     let sigma_eq = (1.5 * deviator_norm2(s_trial)).sqrt();
     if sigma_eq <= y {
         return (*s_trial, 0.0);
@@ -140,14 +157,14 @@ pub fn radial_return<const D: usize>(
     let mut f = sigma_eq - y;
     let tol = 1e-12 * sigma_eq;
     for _ in 0..100 {
-        let slope = 3.0 * g + strength.hardening_modulus(&at(d));
+        let slope = 3.0 * g + strength.hardening_modulus_scaled(&at(d), k);
         let newton = d + f / slope;
         d = if newton.is_finite() && newton > lo && newton < hi {
             newton
         } else {
             0.5 * (lo + hi)
         };
-        f = sigma_eq - 3.0 * g * d - strength.yield_stress(&at(d));
+        f = sigma_eq - 3.0 * g * d - strength.yield_stress_scaled(&at(d), k);
         if f.abs() <= tol || hi - lo <= 1e-15 * hi {
             break;
         }
@@ -157,7 +174,7 @@ pub fn radial_return<const D: usize>(
             hi = d;
         }
     }
-    let y_new = strength.yield_stress(&at(d)).max(0.0);
+    let y_new = strength.yield_stress_scaled(&at(d), k).max(0.0);
     (s_trial * (y_new / sigma_eq), d)
 }
 
