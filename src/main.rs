@@ -53,7 +53,8 @@ enum Command {
         /// Where to write the JSON report.
         #[arg(long, default_value = "bench.json")]
         json: PathBuf,
-        /// Run only these cases (repeatable): large, scaling, cubes_3d, cubes_3d_cn, sphere_plate, plates_2d.
+        /// Run only these cases (repeatable): large, scaling, cubes_3d, cubes_3d_cn, cubes_3d_vm,
+        /// cubes_3d_jc, sphere_plate, plates_2d.
         #[arg(long = "case", value_name = "NAME")]
         cases: Vec<String>,
     },

@@ -307,7 +307,14 @@ fn bench_writes_its_report() {
         };
         assert!(range.contains(&nb), "{}: {nb} neighbours", c["name"]);
     }
-    for name in ["cubes_3d", "cubes_3d_cn", "sphere_plate", "plates_2d"] {
+    for name in [
+        "cubes_3d",
+        "cubes_3d_cn",
+        "cubes_3d_vm",
+        "cubes_3d_jc",
+        "sphere_plate",
+        "plates_2d",
+    ] {
         let threads: Vec<u64> = cases
             .iter()
             .filter(|c| c["name"] == name)
