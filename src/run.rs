@@ -138,18 +138,49 @@ impl<const D: usize> Run<'_, D> {
         self.opts.out_dir.join(name)
     }
 
-    /// Snapshot (and checkpoint) of the current state, once per step.
+    /// Snapshot (and checkpoint) of the current state, once per step. On several ranks each
+    /// writes its own range of the particles as a piece (`<case>_<step>_<rank>.vtp`) and the
+    /// root the index that joins them (`<case>_<step>.pvtp`) once every piece is on disk; the
+    /// pieces in rank order hold the serial snapshot's particles in its order.
     fn snapshot(&mut self) -> Result<()> {
-        if !self.opts.write_fields
-            || !self.opts.ranks.is_root()
-            || self.last_snapshot == Some(self.sim.state.step)
-        {
+        let ranks = self.opts.ranks;
+        if !self.opts.write_fields || self.last_snapshot == Some(self.sim.state.step) {
             return Ok(());
         }
         self.last_snapshot = Some(self.sim.state.step);
-        let name = format!("{}_{:06}.vtp", self.case.name, self.sim.state.step);
-        vtk::write_snapshot(&self.out(&name), &self.sim.particles, self.sim.state.time)?;
-        self.pvd.add(self.sim.state.time, &name)?;
+        let (step, time) = (self.sim.state.step, self.sim.state.time);
+        let name = if ranks.size() == 1 {
+            let name = format!("{}_{step:06}.vtp", self.case.name);
+            vtk::write_snapshot(&self.out(&name), &self.sim.particles, time)?;
+            name
+        } else {
+            let piece = |r: usize| format!("{}_{step:06}_{r}.vtp", self.case.name);
+            let ranges = self.sim.rank_ranges();
+            let mine = ranks.rank();
+            let written = vtk::write_piece(
+                &self.out(&piece(mine)),
+                &self.sim.particles,
+                ranges[mine].clone(),
+                time,
+            );
+            // Also the barrier: no index before every piece is written.
+            let failed = ranks.any(written.is_err());
+            written?;
+            if failed {
+                return Err(Error::Invalid(format!(
+                    "another rank could not write its piece of the snapshot at step {step} in {}",
+                    self.opts.out_dir.display()
+                )));
+            }
+            if !ranks.is_root() {
+                return Ok(());
+            }
+            let name = format!("{}_{step:06}.pvtp", self.case.name);
+            let pieces: Vec<String> = (0..ranks.size()).map(piece).collect();
+            vtk::write_parallel_index(&self.out(&name), &pieces)?;
+            name
+        };
+        self.pvd.add(time, &name)?;
         self.checkpoint()
     }
 
@@ -433,11 +464,21 @@ pub fn earlier_outputs(dir: &Path, case: &str) -> Vec<PathBuf> {
     let Ok(entries) = std::fs::read_dir(dir) else {
         return Vec::new();
     };
+    // `<case>_<step>.vtp`, and a parallel run's `<case>_<step>.pvtp` and its pieces
+    // `<case>_<step>_<rank>.vtp`.
+    let digits = |s: &str| !s.is_empty() && s.bytes().all(|b| b.is_ascii_digit());
     let snapshot = |name: &str| {
-        name.strip_prefix(case)
-            .and_then(|r| r.strip_prefix('_'))
-            .and_then(|r| r.strip_suffix(".vtp"))
-            .is_some_and(|step| !step.is_empty() && step.bytes().all(|b| b.is_ascii_digit()))
+        let Some(rest) = name.strip_prefix(case).and_then(|r| r.strip_prefix('_')) else {
+            return false;
+        };
+        if let Some(step) = rest.strip_suffix(".pvtp") {
+            return digits(step);
+        }
+        rest.strip_suffix(".vtp")
+            .is_some_and(|r| match r.split_once('_') {
+                Some((step, rank)) => digits(step) && digits(rank),
+                None => digits(r),
+            })
     };
     let mut found: Vec<PathBuf> = entries
         .filter_map(|e| e.ok())
@@ -513,8 +554,18 @@ fn check_disk_space(case: &Case, n: usize, out: &Path) -> Result<()> {
 
 fn run_dim<const D: usize>(case: &Case, opts: &RunOptions) -> Result<Summary> {
     let root = opts.ranks.is_root();
-    if root {
-        prepare_output(case, opts)?;
+    let prepared = if root {
+        prepare_output(case, opts)
+    } else {
+        Ok(())
+    };
+    // The other ranks write their snapshot pieces only into the folder the root has prepared.
+    if opts.ranks.any(prepared.is_err()) {
+        prepared?;
+        return Err(Error::Invalid(format!(
+            "the root rank could not prepare {}",
+            opts.out_dir.display()
+        )));
     }
     let out = &opts.out_dir;
     let mut sim = Simulation::<D>::new(case)?;
@@ -722,6 +773,44 @@ fn progress_bar(end: f64) -> indicatif::ProgressBar {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// An earlier run's files are its own: serial snapshots, a parallel run's indexes and
+    /// pieces, the series and the rest, not another case's or a user's files.
+    #[test]
+    fn earlier_outputs_are_the_runs_own_files() {
+        let d = std::env::temp_dir().join(format!("strike-earlier-{}", std::process::id()));
+        std::fs::create_dir_all(&d).unwrap();
+        let own = [
+            "cube_000000.vtp",
+            "cube_000120.pvtp",
+            "cube_000120_0.vtp",
+            "cube_000120_12.vtp",
+            "cube.pvd",
+            "history.csv",
+            "checkpoint.bin",
+        ];
+        let other = [
+            "cube_000120_a.vtp",
+            "cube_.vtp",
+            "cube_000120_.vtp",
+            "cube_1_2_3.vtp",
+            "cubes_000000.vtp",
+            "cube_000120.pvtu",
+            "notes.txt",
+        ];
+        for f in own.iter().chain(&other) {
+            std::fs::write(d.join(f), "x").unwrap();
+        }
+        let mut found: Vec<String> = earlier_outputs(&d, "cube")
+            .iter()
+            .map(|p| p.file_name().unwrap().to_string_lossy().into_owned())
+            .collect();
+        found.sort();
+        let mut expect: Vec<String> = own.iter().map(|s| s.to_string()).collect();
+        expect.sort();
+        assert_eq!(found, expect);
+        std::fs::remove_dir_all(&d).unwrap();
+    }
 
     /// The next output time always lies ahead, however small the interval against the time.
     #[test]

@@ -262,6 +262,17 @@ impl<const D: usize> Simulation<D> {
         self.parts.clear();
     }
 
+    /// Each rank's range of the real particles, as the ranks split the work now (an even
+    /// split by count before the first step has set them): the pieces of a parallel snapshot.
+    pub fn rank_ranges(&self) -> Vec<Range<usize>> {
+        let n = self.particles.n_real;
+        if self.parts.len() == self.ranks.size() && self.parts.last().is_some_and(|r| r.end == n) {
+            self.parts.clone()
+        } else {
+            self.ranks.split(n, |_| 1.0)
+        }
+    }
+
     /// Whether the ranks' loads have drifted apart since their ranges were set: every
     /// `BALANCE_EVERY` steps they compare their time on their own shares, and past
     /// `IMBALANCE` (the slowest over the mean) the next search is a full one, with new ranges

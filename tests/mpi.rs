@@ -107,10 +107,56 @@ fn run(deck: &Path, out: &Path, steps: u64, ranks: usize, resume: Option<&Path>)
 /// run `b` (the summary and checkpoint also hold the wall time). Returns how many files were
 /// compared.
 fn same_outputs(a: &Path, b: &Path, pvd: bool) -> usize {
+    same_files(a, b, |name| {
+        name.ends_with(".vtp") || (pvd && name.ends_with(".pvd")) || name == "history.csv"
+    })
+}
+
+/// The serial run `serial` against a run on several ranks, `ranks`, which writes each snapshot
+/// as a .pvtp of pieces: the history byte for byte, and every snapshot's points and point
+/// data bit for bit as VTK's readers (ParaView's) read them, the .pvtp's pieces joined.
+fn same_as_parallel(serial: &Path, ranks: &Path, example: &str) -> usize {
+    let n = same_files(serial, ranks, |name| name == "history.csv");
+    assert_eq!(n, 1);
+    let pvd = |d: &Path| d.join(format!("{example}.pvd"));
+    let script = Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/vtk_check.py");
+    let out = Command::new(support::vtk_python())
+        .arg(script)
+        .arg(pvd(serial))
+        .arg("--same")
+        .arg(pvd(ranks))
+        .output()
+        .unwrap();
+    let stdout = String::from_utf8_lossy(&out.stdout);
+    assert!(
+        out.status.success() && stdout.starts_with("ok "),
+        "{} against {}: {stdout}{}",
+        serial.display(),
+        ranks.display(),
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let snapshots: usize = stdout
+        .split_whitespace()
+        .nth(2)
+        .and_then(|k| k.parse().ok())
+        .unwrap();
+    let pieces = std::fs::read_dir(ranks)
+        .unwrap()
+        .filter(|e| {
+            let name = e.as_ref().unwrap().file_name().into_string().unwrap();
+            name.ends_with(".pvtp")
+        })
+        .count();
+    assert_eq!(pieces, snapshots, "every snapshot is a .pvtp");
+    n + snapshots
+}
+
+/// The files of `a` that `pick` names are byte for byte those of `b`; how many.
+fn same_files(a: &Path, b: &Path, pick: impl Fn(&str) -> bool) -> usize {
     let mut compared = 0;
     for entry in std::fs::read_dir(a).unwrap() {
         let name = entry.unwrap().file_name().into_string().unwrap();
-        if !(name.ends_with(".vtp") || (pvd && name.ends_with(".pvd")) || name == "history.csv") {
+        if !pick(&name) {
             continue;
         }
         let (x, y) = (
@@ -154,11 +200,13 @@ fn ranks_match_serial(example: &str, spacing: f64, steps: u64) {
     for ranks in 1..=3 {
         let out = d.join(format!("ranks{ranks}"));
         let log = run(&deck, &out, steps, ranks, None);
-        if ranks > 1 {
+        let n = if ranks > 1 {
             assert!(log.contains(&format!("{ranks} MPI ranks")), "{log}");
             vtk_reads(&out.join(format!("{example}.pvd")));
-        }
-        let n = same_outputs(&d.join("serial"), &out, true);
+            same_as_parallel(&d.join("serial"), &out, example)
+        } else {
+            same_outputs(&d.join("serial"), &out, true)
+        };
         assert!(n >= 3, "only {n} files compared");
     }
 }
@@ -180,9 +228,48 @@ fn sphere_plate_cn_on_1_2_3_ranks_and_a_restart_across_ranks_are_bit_identical()
     let out = d.join("restart");
     run(&deck, &out, 30, 3, None);
     run(&deck, &out, 60, 2, Some(&out.join("checkpoint.bin")));
-    // (Its .pvd also lists the snapshot the first part wrote where it stopped.)
-    let n = same_outputs(&d.join("serial"), &out, false);
-    assert!(n >= 3, "only {n} files compared");
+    // Its .pvd also lists the snapshot the first part wrote where it stopped: the serial
+    // run's snapshots are compared with the pieces' of the same steps.
+    let n = same_files(&d.join("serial"), &out, |name| name == "history.csv");
+    assert_eq!(n, 1);
+    let script = Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/vtk_check.py");
+    let mut compared = 0;
+    for entry in std::fs::read_dir(d.join("serial")).unwrap() {
+        let name = entry.unwrap().file_name().into_string().unwrap();
+        let Some(step) = name
+            .strip_prefix("sphere_plate_cn_")
+            .and_then(|r| r.strip_suffix(".vtp"))
+        else {
+            continue;
+        };
+        // A one-snapshot series of each, compared by VTK's readers.
+        let series = |dir: &Path, file: &str, tag: &str| {
+            let path = d.join(format!("{tag}_{step}.pvd"));
+            let xml = format!(
+                "<?xml version=\"1.0\"?>\n<VTKFile type=\"Collection\" version=\"0.1\">\n  <Collection>\n    <DataSet timestep=\"0\" file=\"{}\"/>\n  </Collection>\n</VTKFile>\n",
+                dir.join(file).display()
+            );
+            std::fs::write(&path, xml).unwrap();
+            path
+        };
+        let a = series(&d.join("serial"), &name, "serial");
+        let b = series(&out, &format!("sphere_plate_cn_{step}.pvtp"), "restart");
+        let o = Command::new(support::vtk_python())
+            .arg(&script)
+            .arg(&a)
+            .arg("--same")
+            .arg(&b)
+            .output()
+            .unwrap();
+        assert!(
+            o.status.success(),
+            "step {step}: {}{}",
+            String::from_utf8_lossy(&o.stdout),
+            String::from_utf8_lossy(&o.stderr)
+        );
+        compared += 1;
+    }
+    assert!(compared >= 2, "only {compared} snapshots compared");
 }
 
 /// The other commands refuse several ranks with a clear error (they would write the same

@@ -1,11 +1,15 @@
 #!/usr/bin/env python3
 """Check strike's VTK output with VTK's own XML reader.
 
-    vtk_check.py FILE.vtp|FILE.pvd [--points N] [--fields a,b,c] [--time T]
+    vtk_check.py FILE.vtp|FILE.pvtp|FILE.pvd [--points N] [--fields a,b,c] [--time T]
+    vtk_check.py FILE.pvd --same OTHER.pvd
     vtk_check.py --png FILE.png [--size WxH] [--min-colours K]
 
-A .vtp is opened with vtkXMLPolyDataReader. A .pvd is parsed as XML; every referenced .vtp must
-exist (relative to the .pvd's folder) and is checked the same way. Checks: the reader reports no
+A .vtp is opened with vtkXMLPolyDataReader, a .pvtp (a parallel run's snapshot: an index and
+one piece per rank) with vtkXMLPPolyDataReader. A .pvd is parsed as XML; every referenced file
+must exist (relative to the .pvd's folder) and is checked the same way. With --same, the two
+series must list the same times, and each pair of snapshots hold the same points and point
+data, bit for bit, as VTK's readers read them (a serial .vtp against a parallel .pvtp). Checks: the reader reports no
 error, the point count (if --points), every named point-data array exists with one tuple per
 point, all point-data and point values are finite, each point has one vertex cell, and the
 FieldData TIME exists. With --png, the picture is read with vtkPNGReader and its size and
@@ -28,7 +32,8 @@ def check_vtp(path, points, fields, time=None):
 
     if not os.path.isfile(path):
         raise CheckError(f"{path}: no such file")
-    reader = vtk.vtkXMLPolyDataReader()
+    parallel = path.endswith(".pvtp")
+    reader = vtk.vtkXMLPPolyDataReader() if parallel else vtk.vtkXMLPolyDataReader()
     errors = []
 
     def on_error(obj, event):
@@ -38,7 +43,7 @@ def check_vtp(path, points, fields, time=None):
     reader.GetExecutive().AddObserver("ErrorEvent", on_error)
     reader.SetFileName(path)
     if not reader.CanReadFile(path):
-        raise CheckError(f"{path}: vtkXMLPolyDataReader cannot read this file")
+        raise CheckError(f"{path}: {reader.GetClassName()} cannot read this file")
     reader.Update()
     if errors or reader.GetErrorCode() != 0:
         raise CheckError(f"{path}: reader reported an error (code {reader.GetErrorCode()})")
@@ -113,6 +118,49 @@ def check_pvd(path, points, fields):
     return len(sets)
 
 
+def series(path):
+    """The (time, file) entries of a .pvd, files as paths."""
+    root = ET.parse(path).getroot()
+    base = os.path.dirname(os.path.abspath(path))
+    return [(float(ds.get("timestep")), os.path.join(base, ds.get("file")))
+            for ds in root.find("Collection").findall("DataSet")]
+
+
+def read_poly(path):
+    import vtk
+
+    parallel = path.endswith(".pvtp")
+    reader = vtk.vtkXMLPPolyDataReader() if parallel else vtk.vtkXMLPolyDataReader()
+    reader.SetFileName(path)
+    reader.Update()
+    return reader.GetOutput()
+
+
+def check_same(a, b):
+    """Every snapshot of series a holds the points and point data of b's, bit for bit."""
+    from vtk.util.numpy_support import vtk_to_numpy
+
+    sa, sb = series(a), series(b)
+    if [t for t, _ in sa] != [t for t, _ in sb]:
+        raise CheckError(f"{a} and {b} list different times: {sa} against {sb}")
+    for (_, fa), (_, fb) in zip(sa, sb):
+        pa, pb = read_poly(fa), read_poly(fb)
+        if pa.GetNumberOfPoints() != pb.GetNumberOfPoints() or pa.GetNumberOfPoints() == 0:
+            raise CheckError(
+                f"{fa}: {pa.GetNumberOfPoints()} points, {fb}: {pb.GetNumberOfPoints()}")
+        bits = lambda arr: vtk_to_numpy(arr).tobytes()
+        if bits(pa.GetPoints().GetData()) != bits(pb.GetPoints().GetData()):
+            raise CheckError(f"{fa} and {fb}: the points differ")
+        da, db = pa.GetPointData(), pb.GetPointData()
+        names = [da.GetArrayName(k) for k in range(da.GetNumberOfArrays())]
+        if sorted(names) != sorted(db.GetArrayName(k) for k in range(db.GetNumberOfArrays())):
+            raise CheckError(f"{fa} and {fb}: different point-data arrays")
+        for name in names:
+            if bits(da.GetArray(name)) != bits(db.GetArray(name)):
+                raise CheckError(f"{fa} and {fb}: `{name}` differs")
+    return len(sa)
+
+
 def check_png(path, size, min_colours):
     import vtk
     from vtk.util.numpy_support import vtk_to_numpy
@@ -147,6 +195,7 @@ def main():
     ap.add_argument("--png", action="store_true", help="FILE is a PNG picture")
     ap.add_argument("--size", default=None, help="expected WxH of a PNG")
     ap.add_argument("--min-colours", type=int, default=2)
+    ap.add_argument("--same", default=None, help="another .pvd whose snapshots must be equal")
     args = ap.parse_args()
     fields = [f for f in args.fields.split(",") if f]
     try:
@@ -162,6 +211,9 @@ def main():
                 size = (int(w), int(h))
             w, h, k, nw = check_png(args.file, size, args.min_colours)
             print(f"ok {args.file}: {w}x{h}, {k} colours, {nw:.3f} non-white")
+        elif args.same:
+            k = check_same(args.file, args.same)
+            print(f"ok {args.file}: {k} snapshots the same as {args.same}")
         elif args.file.endswith(".pvd"):
             k = check_pvd(args.file, args.points, fields)
             print(f"ok {args.file}: {k} snapshots, points {args.points}, fields {','.join(fields)}")

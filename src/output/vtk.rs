@@ -10,6 +10,7 @@
 
 use std::fs::File;
 use std::io::{BufWriter, Write};
+use std::ops::Range;
 use std::path::{Path, PathBuf};
 
 use crate::error::{Error, Result};
@@ -122,41 +123,44 @@ pub const POINT_DATA: [(&str, &str, usize); 14] = [
     ("sound_speed", "Float64", 1),
 ];
 
-fn point_data<'a, const D: usize>(p: &'a Particles<D>) -> Vec<Array<'a>> {
-    let n = p.n_real;
+/// The point data of particles `range` (entry i of an array is particle range.start + i).
+fn point_data<'a, const D: usize>(p: &'a Particles<D>, range: Range<usize>) -> Vec<Array<'a>> {
+    let (n, o) = (range.len(), range.start);
+    let end = range.end;
+    let at = move |values: &'a [f64]| &values[o..end];
     vec![
         Array {
             name: "body",
             ty: Ty::Int32,
             ncomp: 1,
             len: n,
-            fill: Box::new(move |i, b| b.extend_from_slice(&(p.body[i] as i32).to_le_bytes())),
+            fill: Box::new(move |i, b| b.extend_from_slice(&(p.body[o + i] as i32).to_le_bytes())),
         },
         Array {
             name: "id",
             ty: Ty::Int32,
             ncomp: 1,
             len: n,
-            fill: Box::new(move |i, b| b.extend_from_slice(&(p.id[i] as i32).to_le_bytes())),
+            fill: Box::new(move |i, b| b.extend_from_slice(&(p.id[o + i] as i32).to_le_bytes())),
         },
-        float_array("velocity", n, 3, move |i, b| f64s(b, &p.velocity3(i))),
-        scalar("pressure", &p.p, n),
-        scalar("density", &p.rho, n),
-        scalar("internal_energy", &p.e, n),
+        float_array("velocity", n, 3, move |i, b| f64s(b, &p.velocity3(o + i))),
+        scalar("pressure", at(&p.p), n),
+        scalar("density", at(&p.rho), n),
+        scalar("internal_energy", at(&p.e), n),
         float_array("deviatoric_stress", n, 9, move |i, b| {
-            f64s(b, &deviatoric_stress3(p, i))
+            f64s(b, &deviatoric_stress3(p, o + i))
         }),
         float_array("von_mises", n, 1, move |i, b| {
-            b.extend_from_slice(&tensor::von_mises(&p.s[i]).to_le_bytes())
+            b.extend_from_slice(&tensor::von_mises(&p.s[o + i]).to_le_bytes())
         }),
-        scalar("plastic_strain", &p.eps_p, n),
-        scalar("damage", &p.damage, n),
-        scalar("smoothing_length", &p.h, n),
+        scalar("plastic_strain", at(&p.eps_p), n),
+        scalar("damage", at(&p.damage), n),
+        scalar("smoothing_length", at(&p.h), n),
         float_array("contact_force", n, 3, move |i, b| {
-            f64s(b, &crate::particles::to3(&p.contact_force[i]))
+            f64s(b, &crate::particles::to3(&p.contact_force[o + i]))
         }),
-        scalar("mass", &p.m, n),
-        scalar("sound_speed", &p.c, n),
+        scalar("mass", at(&p.m), n),
+        scalar("sound_speed", at(&p.c), n),
     ]
 }
 
@@ -199,22 +203,33 @@ pub fn write_snapshot<const D: usize>(
     particles: &Particles<D>,
     time: f64,
 ) -> Result<()> {
-    let n = particles.n_real;
-    if n > particles.len() {
+    write_piece(path, particles, 0..particles.n_real, time)
+}
+
+/// Write the real particles `range` at time `time` (s) to `path` (.vtp): a whole snapshot, or
+/// one rank's piece of a parallel one (see [`write_parallel_index`]).
+pub fn write_piece<const D: usize>(
+    path: &Path,
+    particles: &Particles<D>,
+    range: Range<usize>,
+    time: f64,
+) -> Result<()> {
+    if range.end > particles.n_real || range.start > range.end {
         return Err(Error::Invalid(format!(
-            "{}: n_real = {n} exceeds the {} stored particles",
+            "{}: particles {range:?} are not within the {} real particles",
             path.display(),
-            particles.len()
+            particles.n_real
         )));
     }
+    let (n, o) = (range.len(), range.start);
     let p = particles;
 
     let field = vec![float_array("TIME", 1, 1, move |_, b| {
         b.extend_from_slice(&time.to_le_bytes())
     })];
-    let pd = point_data(p);
+    let pd = point_data(p, range);
     let points = vec![float_array("Points", n, 3, move |i, b| {
-        f64s(b, &p.position3(i))
+        f64s(b, &p.position3(o + i))
     })];
     let verts = vec![
         Array {
@@ -336,6 +351,36 @@ fn xml_escape(s: &str) -> String {
     out
 }
 
+/// Write the index of a parallel snapshot (.pvtp, VTK's PPolyData) at `path`, naming its
+/// pieces `pieces` (.vtp files written by [`write_piece`], relative to the index's folder) in
+/// order: ParaView reads them as one data set. The arrays are declared as [`POINT_DATA`] and
+/// the points as `write_piece` writes them; the time is in each piece's FieldData.
+pub fn write_parallel_index(path: &Path, pieces: &[String]) -> Result<()> {
+    use std::fmt::Write as _;
+    let mut xml = String::with_capacity(2048 + 64 * pieces.len());
+    xml.push_str("<?xml version=\"1.0\"?>\n");
+    xml.push_str(
+        "<VTKFile type=\"PPolyData\" version=\"1.0\" byte_order=\"LittleEndian\" \
+         header_type=\"UInt64\">\n  <PPolyData GhostLevel=\"0\">\n",
+    );
+    xml.push_str("    <PPointData Scalars=\"pressure\" Vectors=\"velocity\">\n");
+    for (name, ty, ncomp) in POINT_DATA {
+        let _ = write!(xml, "      <PDataArray type=\"{ty}\" Name=\"{name}\"");
+        if ncomp != 1 {
+            let _ = write!(xml, " NumberOfComponents=\"{ncomp}\"");
+        }
+        xml.push_str("/>\n");
+    }
+    xml.push_str("    </PPointData>\n    <PPoints>\n");
+    xml.push_str("      <PDataArray type=\"Float64\" Name=\"Points\" NumberOfComponents=\"3\"/>\n");
+    xml.push_str("    </PPoints>\n");
+    for piece in pieces {
+        let _ = writeln!(xml, "    <Piece Source=\"{}\"/>", xml_escape(piece));
+    }
+    xml.push_str("  </PPolyData>\n</VTKFile>\n");
+    atomic::write(path, xml.as_bytes())
+}
+
 /// A .pvd collection (ParaView time series) of snapshot files.
 #[derive(Debug, Clone)]
 pub struct PvdWriter {
@@ -420,7 +465,7 @@ mod tests {
     fn point_data_table_matches_arrays() {
         let mut p = Particles::<3>::default();
         p.push(Vector::<3>::zeros(), Vector::<3>::zeros(), 1.0, 1.0, 1.0, 0);
-        let arrays = point_data(&p);
+        let arrays = point_data(&p, 0..1);
         assert_eq!(arrays.len(), POINT_DATA.len());
         for (a, (name, ty, ncomp)) in arrays.iter().zip(POINT_DATA) {
             assert_eq!((a.name, a.ty.name(), a.ncomp), (name, ty, ncomp));
