@@ -108,7 +108,8 @@ enum Command {
         fine: bool,
         /// Only these cases (repeatable): kernel, consistency, contact_direction, elastic_wave,
         /// hel, energy, planar_impact, bars, slow_bars, striker, sliding, incline, rubber_rings,
-        /// hertz, planar_7kms, sphere_plate, spall, taylor, taylor_walls.
+        /// hertz, planar_7kms, sphere_plate, spall, shocked_strength, taylor,
+        /// taylor_walls.
         #[arg(long = "case", value_name = "NAME")]
         cases: Vec<String>,
         /// Output directory (default: runs/validate).
