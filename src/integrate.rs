@@ -206,7 +206,7 @@ pub fn advance<const D: usize>(
                     let trial = *s + jaumann_rate(s, grad_v, g) * dt;
                     let damaged = Damaged {
                         inner: mat.strength.as_ref(),
-                        keep: 1.0 - *dmg,
+                        keep: mat.carried(*dmg),
                     };
                     let (s_new, d) = radial_return(&trial, &st, &damaged);
                     *s = s_new;

@@ -1,7 +1,19 @@
-//! Damage D ∈ [0, 1] (DESIGN.md §7): a particle with damage D carries (1 − D) of its tension
-//! and of its yield stress, and all of its compression. A failed particle (D = 1) is a fluid
-//! that cannot be pulled: it keeps its mass, momentum and energy, and pushes on its
-//! neighbours only in compression.
+//! Damage D ∈ [0, 1] (DESIGN.md §7). A failed particle (D = 1) is a fluid that cannot be
+//! pulled: it keeps its mass, momentum and energy, carries no tension and no deviator, and
+//! pushes on its neighbours only in compression. Before it fails, what D does depends on the
+//! model ([`Damage::degrades`], [`crate::material::Material::carried`]):
+//! - the spall model's D is the share of the particle its cracks have crossed: the particle
+//!   carries (1 − D) of its tension and of its yield stress (Benz & Asphaug 1994);
+//! - Johnson–Cook's D is a fracture indicator, the share of the failure strain used up: the
+//!   particle keeps its whole strength until D = 1 (Johnson & Cook 1985: "fracture occurs when
+//!   D = 1.0"; LS-DYNA's MAT_015 and AUTODYN do the same). The hardening curve A + B εp^n is
+//!   the material's own up to fracture, so scaling it by (1 − D) as well would count the
+//!   damage twice: strike did so until 2026-11-26 (DESIGN.md §7 reads that way), and a
+//!   2024-T3 block squeezed between frictionless platens then lost half its flow stress by
+//!   εp = 0.27, at 60 % of its failure strain, and sheared apart along bands
+//!   (`examples/jc_failure_compression.toml`). A material with both models uses the indicator
+//!   reading for both: the spall's cracks cross a particle in a few nanoseconds, so that its
+//!   tension then falls at once rather than over those nanoseconds.
 //!
 //! **Fragments do not stick back together.** A pair with a failed member passes on only the
 //! compressive pressures of its two particles (`physics::tension_cut`: the tension and the
@@ -74,6 +86,10 @@ pub trait Damage: Send + Sync + std::fmt::Debug {
     /// then the step need not build its [`DamageState`] (an eigenvalue, a cube root, the
     /// temperature), which most particles in an impact do not need at most steps.
     fn idle(&self, sigma_1_bound: f64, d_eps_p: f64) -> bool;
+
+    /// Whether the particle carries only (1 − D) of its tension and yield stress before it
+    /// fails (true), or all of them until D = 1, D being a fracture indicator (false).
+    fn degrades(&self) -> bool;
 }
 
 /// Spall: see the module doc.
@@ -105,6 +121,10 @@ impl Damage for Spall {
 
     fn idle(&self, sigma_1_bound: f64, _d_eps_p: f64) -> bool {
         sigma_1_bound <= self.strength
+    }
+
+    fn degrades(&self) -> bool {
+        true
     }
 }
 
@@ -198,9 +218,14 @@ impl Damage for JohnsonCookFailure {
     fn idle(&self, _sigma_1_bound: f64, d_eps_p: f64) -> bool {
         d_eps_p <= 0.0
     }
+
+    fn degrades(&self) -> bool {
+        false
+    }
 }
 
-/// Scales a strength model's yield stress by (1 − D) (see the module doc).
+/// Scales a strength model's yield stress by the share `keep` of it that a damaged particle
+/// carries ([`crate::material::Material::carried`]).
 #[derive(Debug)]
 pub struct Damaged<'a> {
     pub inner: &'a dyn super::Strength,
@@ -211,7 +236,7 @@ impl super::Strength for Damaged<'_> {
     fn shear_modulus(&self, st: &super::StrengthState) -> f64 {
         self.inner.shear_modulus(st)
     }
-    /// (1 − D) Y, and 0 for a failed particle also where Y = ∞ (an elastic material).
+    /// keep · Y, and 0 for a failed particle also where Y = ∞ (an elastic material).
     fn yield_stress(&self, st: &super::StrengthState) -> f64 {
         if self.keep <= 0.0 {
             0.0

@@ -34,6 +34,9 @@ pub struct Material {
     pub artificial_stress: Option<f64>,
     /// Damage models, applied in this order (empty: never fails).
     pub damage: Vec<Box<dyn Damage>>,
+    /// Whether damage below 1 weakens the particle: every damage model [`Damage::degrades`]
+    /// (see `damage`'s module doc).
+    pub damage_degrades: bool,
     /// Whether the material flows plastically (a shear modulus and a finite yield stress): its
     /// particles' h follows their stretch (`integrate::smoothing_length`).
     pub flows: bool,
@@ -93,6 +96,7 @@ impl Material {
         if let Some(f) = spec.damage.johnson_cook {
             damage.push(Box::new(f));
         }
+        let damage_degrades = !damage.is_empty() && damage.iter().all(|m| m.degrades());
         let flows = strength.reference_shear_modulus() > 0.0
             && strength.reference_yield_stress().is_finite();
         Material {
@@ -104,6 +108,7 @@ impl Material {
             p_min: spec.pressure_cutoff.unwrap_or(f64::NEG_INFINITY),
             artificial_stress: spec.artificial_stress,
             damage,
+            damage_degrades,
         }
     }
 
@@ -112,12 +117,25 @@ impl Material {
         self.eos.pressure(rho, e).max(self.p_min)
     }
 
-    /// Pressure carried with damage D, from the EOS's pressure p_eos: the cut-off, and (1 − D)
-    /// of any tension.
+    /// The share of its tension and yield stress that a particle with damage D carries: 0 once
+    /// failed (D ≥ 1); before, 1 − D where the damage degrades the material (spall) and 1 where
+    /// it is a fracture indicator (Johnson–Cook; see `damage`'s module doc).
+    pub fn carried(&self, d: f64) -> f64 {
+        if d >= 1.0 {
+            0.0
+        } else if self.damage_degrades {
+            1.0 - d
+        } else {
+            1.0
+        }
+    }
+
+    /// Pressure carried with damage D, from the EOS's pressure p_eos: the cut-off, and the
+    /// [`Material::carried`] share of any tension.
     pub fn damaged_pressure(&self, p_eos: f64, d: f64) -> f64 {
         let p = p_eos.max(self.p_min);
         if p < 0.0 {
-            p * (1.0 - d)
+            p * self.carried(d)
         } else {
             p
         }
@@ -349,5 +367,32 @@ impl crate::case::DamageSpec {
                 }
             }
         })
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::deck::library::library_material;
+
+    /// Spall damage weakens a particle as it grows; Johnson–Cook's is a fracture indicator
+    /// that takes nothing off until D = 1, alone or beside the spall criterion.
+    #[test]
+    fn what_a_damaged_particle_carries() {
+        let spall_only = Material::from_spec(&library_material("al_6061_t6").unwrap());
+        let with_jc = Material::from_spec(&library_material("al_2024_t3").unwrap());
+        assert_eq!(spall_only.damage.len(), 1);
+        assert_eq!(with_jc.damage.len(), 2);
+        for d in [0.0, 0.3, 0.99] {
+            assert_eq!(spall_only.carried(d), 1.0 - d);
+            assert_eq!(spall_only.damaged_pressure(-1e9, d), -1e9 * (1.0 - d));
+            assert_eq!(with_jc.carried(d), 1.0);
+            assert_eq!(with_jc.damaged_pressure(-1e9, d), -1e9);
+        }
+        for m in [&spall_only, &with_jc] {
+            assert_eq!(m.carried(1.0), 0.0);
+            assert_eq!(m.damaged_pressure(-1e9, 1.0), 0.0);
+            assert_eq!(m.damaged_pressure(2e9, 1.0), 2e9);
+        }
     }
 }
