@@ -307,14 +307,12 @@ fn bench_writes_its_report() {
         };
         assert!(range.contains(&nb), "{}: {nb} neighbours", c["name"]);
     }
-    for name in [
-        "cubes_3d",
-        "cubes_3d_cn",
-        "cubes_3d_vm",
-        "cubes_3d_jc",
-        "sphere_plate",
-        "plates_2d",
-    ] {
+    // Every case on 1 thread and on all cores (the large case and the scaling runs have their
+    // own thread counts).
+    for name in strike::bench::GROUPS
+        .into_iter()
+        .filter(|g| !matches!(*g, "large" | "scaling"))
+    {
         let threads: Vec<u64> = cases
             .iter()
             .filter(|c| c["name"] == name)
