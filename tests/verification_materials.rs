@@ -212,90 +212,94 @@ shape = { type = "box", min = [0.0, 0.0, 0.0], max = [0.01, 0.01, 0.01] }
 }
 
 /// Issue 13 (Johnson–Cook failure in a run; `examples/jc_failure_compression.toml`): a 2024-T3
-/// block squeezed in plane strain between frictionless platens at 20 m/s, at two resolutions.
-/// Its core (the particles that start in the middle quarter) flows at the Johnson–Cook flow
-/// stress of its own plastic strain, rate and adiabatic temperature, undamaged, until it
-/// fails, and it fails at the failure strain of plane-strain compression's triaxiality,
-/// ε_f = D1 + D2 e^(−D3/√3) = 0.4391 (D4 = D5 = 0 in the deck).
+/// block squeezed in plane strain between frictionless platens at 20 m/s, at two resolutions
+/// and in both formulations. Its core (the particles that start in the middle quarter) flows at
+/// the Johnson–Cook flow stress of its own plastic strain, rate and adiabatic temperature,
+/// undamaged, until it fails, and it fails at the failure strain of plane-strain compression's
+/// triaxiality, ε_f = D1 + D2 e^(−D3/√3) = 0.4391 (D4 = D5 = 0 in the deck).
 ///
 /// The flow stress is held within 4 %: the damage is a fracture indicator and takes nothing
 /// off the strength before D = 1. With the damage scaling the yield stress by (1 − D), as it did
 /// before 2026-11-26, the core's flow stress fell to 38 % of it and it failed at εp = 0.36:
-/// this test then fails.
-/// The failure strain is held within 10 %: the platens' stand-off and the lattice's ringing
-/// keep the core's triaxiality a few hundredths off −1/√3.
+/// this test then fails. The failure strain is held within 10 %: the platens' stand-off and the
+/// lattice's ringing keep the core's triaxiality a few hundredths off −1/√3. Measured
+/// (2026-11-26): conventional SPH +3.6 / +1.7 % at Δp = 0.1 / 0.05 mm, CN-SPH +5.5 / −8.4 %.
+/// In CN-SPH at 0.05 mm the block's corners at the platens' edges run ahead (εp = 0.52 when the
+/// core is at 0.32), fail first, and a failure front sweeps in from them through the core
+/// before it reaches ε_f on its own: a figure that moves away with refinement (README, Not yet).
 #[test]
 fn johnson_cook_failure_in_plane_strain_compression() {
+    use strike::case::Formulation;
     // Lesuer 2000's 2024-T3, as the library has it; the test's own hand formulas.
     let (a, b, n, c, m) = (369e6, 684e6, 0.73, 0.0083, 1.7);
     let (t_room, t_melt, c_p, chi) = (293.15, 775.0, 875.0, 0.9);
     let eps_f = 0.13 + 0.13 * (1.5 / 3f64.sqrt()).exp();
     let closing = 20.0;
-    for case in two_resolutions("jc_failure_compression") {
-        let dp = case.bodies[0].spacing;
-        let mut sim = Simulation::<2>::new(&case).unwrap();
-        let p = &sim.particles;
-        let core: std::collections::HashSet<u32> = (0..p.n_real)
-            .filter(|&i| p.body[i] == 0 && p.x[i][0].abs() < 0.5e-3 && p.x[i][1].abs() < 0.5e-3)
-            .map(|i| p.id[i])
-            .collect();
-        let mut failed_at: std::collections::HashMap<u32, f64> = Default::default();
-        let (mut worst_flow, mut samples, mut next) = (0.0f64, 0, 1.0e-6);
-        let end = case.simulation.end_time;
-        while sim.state.time < end * (1.0 - 1e-12) {
-            sim.step(end - sim.state.time).unwrap();
+    for formulation in [Formulation::Conventional, Formulation::Corrected] {
+        for mut case in two_resolutions("jc_failure_compression") {
+            case.simulation.formulation = formulation;
+            let dp = case.bodies[0].spacing;
+            let mut sim = Simulation::<2>::new(&case).unwrap();
             let p = &sim.particles;
-            let in_core: Vec<usize> = (0..p.n_real)
-                .filter(|&i| p.body[i] == 0 && core.contains(&p.id[i]))
+            let core: std::collections::HashSet<u32> = (0..p.n_real)
+                .filter(|&i| p.body[i] == 0 && p.x[i][0].abs() < 0.5e-3 && p.x[i][1].abs() < 0.5e-3)
+                .map(|i| p.id[i])
                 .collect();
-            for &i in &in_core {
-                if p.damage[i] >= 1.0 {
-                    failed_at.entry(p.id[i]).or_insert(p.eps_p[i]);
+            let mut failed_at: std::collections::HashMap<u32, f64> = Default::default();
+            let (mut worst_flow, mut samples, mut next) = (0.0f64, 0, 1.0e-6);
+            let end = case.simulation.end_time;
+            while sim.state.time < end * (1.0 - 1e-12) {
+                sim.step(end - sim.state.time).unwrap();
+                let p = &sim.particles;
+                let in_core: Vec<usize> = (0..p.n_real)
+                    .filter(|&i| p.body[i] == 0 && core.contains(&p.id[i]))
+                    .collect();
+                for &i in &in_core {
+                    if p.damage[i] >= 1.0 {
+                        failed_at.entry(p.id[i]).or_insert(p.eps_p[i]);
+                    }
                 }
+                if sim.state.time < next || !failed_at.is_empty() {
+                    continue;
+                }
+                next += 1.0e-6;
+                let k = in_core.len() as f64;
+                let mean =
+                    |f: &dyn Fn(usize) -> f64| in_core.iter().map(|&i| f(i)).sum::<f64>() / k;
+                let eps_p = mean(&|i| p.eps_p[i]);
+                if eps_p < 0.05 {
+                    continue;
+                }
+                let sigma_eq = mean(&|i| strike::tensor::von_mises(&p.s[i]));
+                // The platens' gap, the block's height: the nominal equivalent strain rate of
+                // plane strain, 2/√3 v/H.
+                let (lo, hi) = extent_y(p, 0);
+                let rate = 2.0 / 3f64.sqrt() * closing / (hi - lo + dp);
+                let t_star = (chi * mean(&|i| p.plastic_work[i]) / c_p) / (t_melt - t_room);
+                let y = (a + b * eps_p.powf(n)) * (1.0 + c * rate.ln()) * (1.0 - t_star.powf(m));
+                worst_flow = worst_flow.max((sigma_eq / y - 1.0).abs());
+                samples += 1;
             }
-            if sim.state.time < next || !failed_at.is_empty() {
-                continue;
-            }
-            next += 1.0e-6;
-            let k = in_core.len() as f64;
-            let mean = |f: &dyn Fn(usize) -> f64| in_core.iter().map(|&i| f(i)).sum::<f64>() / k;
-            let eps_p = mean(&|i| p.eps_p[i]);
-            if eps_p < 0.05 {
-                continue;
-            }
-            let s = |i: usize, r: usize, c: usize| p.s[i][(r, c)];
-            let sigma_eq = mean(&|i| {
-                let (xx, yy, xy) = (s(i, 0, 0), s(i, 1, 1), s(i, 0, 1));
-                (1.5 * (xx * xx + yy * yy + (xx + yy).powi(2) + 2.0 * xy * xy)).sqrt()
-            });
-            // The platens' gap, the block's height: the nominal equivalent strain rate of plane
-            // strain, 2/√3 v/H.
-            let (lo, hi) = extent_y(p, 0);
-            let rate = 2.0 / 3f64.sqrt() * closing / (hi - lo + dp);
-            let t_star = (chi * mean(&|i| p.plastic_work[i]) / c_p) / (t_melt - t_room);
-            let y = (a + b * eps_p.powf(n)) * (1.0 + c * rate.ln()) * (1.0 - t_star.powf(m));
-            worst_flow = worst_flow.max((sigma_eq / y - 1.0).abs());
-            samples += 1;
+            let strains: Vec<f64> = failed_at.values().copied().collect();
+            let at_failure = strains.iter().sum::<f64>() / strains.len().max(1) as f64;
+            println!(
+                "JC compression, {formulation:?}, Δp = {dp:.1e} m: flow stress within {:.2} % of Johnson–Cook over {samples} samples; {} of {} core particles failed, at εp = {at_failure:.4} (ε_f {eps_f:.4}, {:+.2} %)",
+                100.0 * worst_flow,
+                strains.len(),
+                core.len(),
+                100.0 * (at_failure / eps_f - 1.0)
+            );
+            assert!(samples >= 10, "too few samples before failure: {samples}");
+            assert!(
+                worst_flow < 0.04,
+                "flow stress off Johnson–Cook by {worst_flow}"
+            );
+            assert_eq!(strains.len(), core.len(), "not every core particle failed");
+            assert!(
+                (at_failure / eps_f - 1.0).abs() < 0.10,
+                "failed at εp = {at_failure} against ε_f = {eps_f}"
+            );
         }
-        let strains: Vec<f64> = failed_at.values().copied().collect();
-        let at_failure = strains.iter().sum::<f64>() / strains.len().max(1) as f64;
-        println!(
-            "JC compression, Δp = {dp:.1e} m: flow stress within {:.2} % of Johnson–Cook over {samples} samples; {} of {} core particles failed, at εp = {at_failure:.4} (ε_f {eps_f:.4}, {:+.2} %)",
-            100.0 * worst_flow,
-            strains.len(),
-            core.len(),
-            100.0 * (at_failure / eps_f - 1.0)
-        );
-        assert!(samples >= 10, "too few samples before failure: {samples}");
-        assert!(
-            worst_flow < 0.04,
-            "flow stress off Johnson–Cook by {worst_flow}"
-        );
-        assert_eq!(strains.len(), core.len(), "not every core particle failed");
-        assert!(
-            (at_failure / eps_f - 1.0).abs() < 0.10,
-            "failed at εp = {at_failure} against ε_f = {eps_f}"
-        );
     }
 }
 
