@@ -9,8 +9,8 @@
 //!   D = 1.0"; LS-DYNA's MAT_015 and AUTODYN do the same). The hardening curve A + B εp^n is
 //!   the material's own up to fracture, so scaling it by (1 − D) as well would count the
 //!   damage twice: strike did so until 2026-11-26 (DESIGN.md §7 reads that way), and the
-//!   core of a 2024-T3 block squeezed between frictionless platens then fell to 38 % of the
-//!   Johnson–Cook flow stress and failed at εp = 0.36 against ε_f = 0.44
+//!   core of a 2024-T3 block squeezed between frictionless platens then fell to 43 % of the
+//!   Johnson–Cook flow stress and failed at εp = 0.34 against ε_f = 0.44
 //!   (`examples/jc_failure_compression.toml`). A material with both models uses the indicator
 //!   reading for both: the spall's cracks cross a particle in a few nanoseconds, so that its
 //!   tension then falls at once rather than over those nanoseconds.
