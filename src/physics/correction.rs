@@ -225,12 +225,14 @@ fn correction<const D: usize, K: Kernel>(
 
 /// −Σ_j V_j (1/r dW/dr) x_ij ⊗ x_ij over i's list (`CHECK`: only neighbours of bodies joined
 /// to i's), its symmetric components per lane. The neighbours in i's support are queued first
-/// (the list also holds the skin's), then summed [`LANES`] at a time, the last chunk filled up
-/// with the padding record, as in the rate pass (sending the whole list through the lanes
-/// instead made the CN-SPH cubes of `strike bench` 25 % slower). Also returns which of the
-/// first [`SUPPORT_ENTRIES`] entries lie in the support (see [`Support`]).
+/// (the list also holds the skin's; filtered four entries at a time), then summed [`LANES`] at
+/// a time, the last chunk filled up with the padding record, as in the rate pass (sending the
+/// whole list through the lanes instead made the CN-SPH cubes of `strike bench` 25 % slower;
+/// queueing each neighbour's x_ij and r² from the filter, to spare the sums their gathers,
+/// 4 % slower than gathering again). Also returns which of the first [`SUPPORT_ENTRIES`]
+/// entries lie in the support (see [`Support`]).
 #[inline(always)]
-#[allow(clippy::needless_range_loop)] // r² written as the rate pass writes it
+#[allow(clippy::needless_range_loop)] // lane loops read as the lanes' own
 fn moments<const D: usize, K: Kernel, const CHECK: bool>(
     kernel: K,
     i: usize,
@@ -242,35 +244,34 @@ fn moments<const D: usize, K: Kernel, const CHECK: bool>(
     let pi = &points.at[i];
     let mut sums = [[0.0; LANES]; 6];
     let mut mask: Support = [0; 2];
-    let mut queue = [padding; BATCH];
+    // Room for one more quad of entries past a full batch.
+    let mut queue = [padding; BATCH + LANES];
     let mut queued = 0;
-    let (xi, hi) = (pi.x, pi.h);
+    let joins = |j: u32| !CHECK || joined(points.body[i], points.body[j as usize]);
     // 64 entries at a time, each one's bit of the support kept in a register (the words past
-    // the second, of lists longer than a `Support` covers, are dropped).
+    // the second, of lists longer than a `Support` covers, are dropped); within them, four
+    // entries at a time.
     for (w, part) in list.chunks(64).enumerate() {
         let mut bits = 0u64;
-        for (k, &j) in part.iter().enumerate() {
-            let pj = &points.at[j as usize];
-            // r² and the support as the rate pass computes them (`physics::particle_rates`),
-            // to the bit: the rate pass trusts this pass's `Support`.
-            let mut r2 = 0.0;
-            for a in 0..D {
-                let d = xi[a] - pj.x[a];
-                r2 += d * d;
+        let mut quads = part.chunks_exact(LANES);
+        let mut k = 0;
+        for quad in &mut quads {
+            let inside = in_support::<D, LANES>(pi, quad, points);
+            for l in 0..LANES {
+                bits |= (inside[l] as u64) << (k + l);
+                queue[queued] = quad[l];
+                queued += (inside[l] & joins(quad[l])) as usize;
             }
-            let support = hi + pj.h;
-            // A coincident neighbour (r = 0) has no direction and adds nothing.
-            let inside = r2 < support * support && r2 > 0.0;
+            k += LANES;
+            flush_batch::<D, K>(kernel, pi, &mut queue, &mut queued, points, &mut sums);
+        }
+        for &j in quads.remainder() {
+            let inside = in_support::<D, 1>(pi, &[j], points)[0];
             bits |= (inside as u64) << k;
             queue[queued] = j;
-            queued +=
-                (inside && (!CHECK || joined(points.body[i], points.body[j as usize]))) as usize;
-            if queued == BATCH {
-                for chunk in queue.chunks_exact(LANES) {
-                    lanes::<D, K>(kernel, pi, chunk, points, &mut sums);
-                }
-                queued = 0;
-            }
+            queued += (inside & joins(j)) as usize;
+            k += 1;
+            flush_batch::<D, K>(kernel, pi, &mut queue, &mut queued, points, &mut sums);
         }
         if let Some(m) = mask.get_mut(w) {
             *m = bits;
@@ -278,17 +279,90 @@ fn moments<const D: usize, K: Kernel, const CHECK: bool>(
     }
     let used = queued.div_ceil(LANES) * LANES;
     queue[queued..used].fill(padding);
-    for chunk in queue[..used].chunks_exact(LANES) {
-        lanes::<D, K>(kernel, pi, chunk, points, &mut sums);
-    }
+    sum_queue::<D, K>(kernel, pi, &queue[..used], points, &mut sums);
     (sums, mask)
+}
+
+/// Whether each of the entries `js` lies in i's support, 0 < r_ij < h_i + h_j, with r² and
+/// the support computed as the rate pass computes them (`physics::particle_rates`), to the
+/// bit: the rate pass trusts this pass's [`Support`]. A coincident neighbour (r = 0) has no
+/// direction and adds nothing. Gathered first, then each loop over the lanes innermost, with
+/// no branch, so that it vectorises (tested one by one with a branch, the skin's entries,
+/// among the support's in no order a branch could predict, cost a third of the pass).
+#[inline(always)]
+#[allow(clippy::needless_range_loop)] // index loops over lanes and axes read as the equations
+fn in_support<const D: usize, const N: usize>(
+    pi: &Point<D>,
+    js: &[u32],
+    points: Points<D>,
+) -> [bool; N] {
+    let mut xj = [[0.0; N]; D];
+    let mut hj = [0.0; N];
+    for l in 0..N {
+        let p = &points.at[js[l] as usize];
+        for a in 0..D {
+            xj[a][l] = p.x[a];
+        }
+        hj[l] = p.h;
+    }
+    let mut r2 = [0.0; N];
+    for a in 0..D {
+        for l in 0..N {
+            let d = pi.x[a] - xj[a][l];
+            r2[l] += d * d;
+        }
+    }
+    std::array::from_fn(|l| {
+        let support = pi.h + hj[l];
+        (r2[l] < support * support) & (r2[l] > 0.0)
+    })
+}
+
+/// Sums a full batch of the queue, and moves what was queued past it to the front: the
+/// neighbours still meet the lanes [`LANES`] at a time in list order, so the sums do not
+/// depend on where the batches fall.
+#[inline(always)]
+fn flush_batch<const D: usize, K: Kernel>(
+    kernel: K,
+    pi: &Point<D>,
+    queue: &mut [u32; BATCH + LANES],
+    queued: &mut usize,
+    points: Points<D>,
+    sums: &mut [[f64; LANES]; 6],
+) {
+    if *queued >= BATCH {
+        sum_queue::<D, K>(kernel, pi, &queue[..BATCH], points, sums);
+        queue.copy_within(BATCH.., 0);
+        *queued -= BATCH;
+    }
+}
+
+/// The queued neighbours' terms, two chunks of [`LANES`] at a time: their arithmetic
+/// (a square root and a division each, in one chain) is independent, and computed together
+/// the two chains overlap; they are still added chunk after chunk, so the sums are the same
+/// to the bit as one chunk at a time.
+#[inline(always)]
+fn sum_queue<const D: usize, K: Kernel>(
+    kernel: K,
+    pi: &Point<D>,
+    queue: &[u32],
+    points: Points<D>,
+    sums: &mut [[f64; LANES]; 6],
+) {
+    let mut pairs = queue.chunks_exact(2 * LANES);
+    for chunk in &mut pairs {
+        lanes::<D, K, { 2 * LANES }>(kernel, pi, chunk, points, sums);
+    }
+    for chunk in pairs.remainder().chunks_exact(LANES) {
+        lanes::<D, K, LANES>(kernel, pi, chunk, points, sums);
+    }
 }
 
 /// One chunk of [`moments`]: straight-line arithmetic over the lanes, no branch, so that it
 /// vectorises (the padding record lies far beyond every support and adds exactly zero).
 #[inline(always)]
 #[allow(clippy::needless_range_loop)] // index loops over lanes and axes read as the equations
-fn lanes<const D: usize, K: Kernel>(
+fn lanes<const D: usize, K: Kernel, const N: usize>(
     kernel: K,
     pi: &Point<D>,
     js: &[u32],
@@ -296,10 +370,10 @@ fn lanes<const D: usize, K: Kernel>(
     sums: &mut [[f64; LANES]; 6],
 ) {
     // Lane arrays, gathered first, then each loop over the lanes innermost.
-    let mut xj = [[0.0; LANES]; D];
-    let mut hj = [0.0; LANES];
-    let mut vj = [0.0; LANES];
-    for l in 0..LANES {
+    let mut xj = [[0.0; N]; D];
+    let mut hj = [0.0; N];
+    let mut vj = [0.0; N];
+    for l in 0..N {
         let p = &points.at[js[l] as usize];
         for a in 0..D {
             xj[a][l] = p.x[a];
@@ -307,22 +381,26 @@ fn lanes<const D: usize, K: Kernel>(
         hj[l] = p.h;
         vj[l] = points.vol[js[l] as usize];
     }
-    let mut xij = [[0.0; LANES]; D];
-    let mut r2 = [0.0; LANES];
+    let mut xij = [[0.0; N]; D];
+    let mut r2 = [0.0; N];
     for a in 0..D {
-        for l in 0..LANES {
+        for l in 0..N {
             xij[a][l] = pi.x[a] - xj[a][l];
             r2[l] += xij[a][l] * xij[a][l];
         }
     }
-    let r: [f64; LANES] = std::array::from_fn(|l| r2[l].sqrt());
-    let h: [f64; LANES] = std::array::from_fn(|l| 0.5 * (pi.h + hj[l]));
-    let gf = kernel.grad_factors::<D, LANES>(&r, &h);
-    let w: [f64; LANES] = std::array::from_fn(|l| -vj[l] * gf[l]);
-    for (k, &(a, b)) in SYM.iter().enumerate() {
-        if a < D && b < D {
-            for l in 0..LANES {
-                sums[k][l] += w[l] * xij[a][l] * xij[b][l];
+    let r: [f64; N] = std::array::from_fn(|l| r2[l].sqrt());
+    let h: [f64; N] = std::array::from_fn(|l| 0.5 * (pi.h + hj[l]));
+    let gf = kernel.grad_factors::<D, N>(&r, &h);
+    let w: [f64; N] = std::array::from_fn(|l| -vj[l] * gf[l]);
+    // Chunk after chunk, each lane into its own sum.
+    for c in 0..N / LANES {
+        for (k, &(a, b)) in SYM.iter().enumerate() {
+            if a < D && b < D {
+                for l in 0..LANES {
+                    let m = c * LANES + l;
+                    sums[k][l] += w[m] * xij[a][m] * xij[b][m];
+                }
             }
         }
     }
@@ -580,6 +658,50 @@ mod tests {
         assert!(exceeds(&Tensor::<2>::identity(), 0.999));
         let d = Tensor::<3>::from_diagonal(&Vector::<3>::new(0.9, 0.8, 1.2));
         assert_eq!(gershgorin_lower_bound(&d), 0.8);
+    }
+
+    /// Lists longer than a batch and than a [`Support`] covers (h = 2.5 Δp: about 500
+    /// neighbours in the support, and the skin's among them, so that a batch fills in the middle
+    /// of a quad):
+    /// B_i A_i = I with A_i summed here one neighbour at a time, inside and at a corner of a
+    /// perturbed block, the same on both builds, and no support marked.
+    #[test]
+    fn long_lists_sum_every_neighbour() {
+        let mut p = block::<3>(12, 0.2);
+        p.h.iter_mut().for_each(|h| *h = 2.5);
+        let mut nl = NeighborList::default();
+        // With a skin, so that the list's quads hold entries outside the support too.
+        nl.build(&p.x, &p.h, p.n_real, 1.0);
+        let all = 0..p.n_real;
+        let (mut wide, mut portable) = (Vec::new(), Vec::new());
+        corrections(CubicSpline, &p, &nl, |a, b| a == b, &all, &mut wide);
+        corrections_on(
+            CubicSpline,
+            &p,
+            &nl,
+            |a, b| a == b,
+            &all,
+            &mut portable,
+            false,
+        );
+        assert_eq!(wide, portable);
+        for i in [6 + 6 * 12 + 6 * 144, 0] {
+            let mut a = Tensor::<3>::zeros();
+            let mut inside = 0;
+            for &j in nl.list(i) {
+                let j = j as usize;
+                let xij = p.x[i] - p.x[j];
+                let (r, h) = (xij.norm(), 0.5 * (p.h[i] + p.h[j]));
+                if r > 0.0 && r < 2.0 * h {
+                    a -= xij * xij.transpose() * (p.volume(j) * CubicSpline.dw::<3>(r, h) / r);
+                    inside += 1;
+                }
+            }
+            assert!(inside > BATCH, "particle {i}: {inside} neighbours");
+            let err = (wide[i].b * a - Tensor::<3>::identity()).norm();
+            assert!(err < 1e-12, "particle {i}: |B A − I| = {err}");
+            assert!(!wide[i].fallback && wide[i].support.is_none());
+        }
     }
 
     /// The surface indicator and the fallback: about 1 inside, lower at a face and a corner,
