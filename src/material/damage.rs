@@ -15,18 +15,26 @@
 //!   reading for both: the spall's cracks cross a particle in a few nanoseconds, so that its
 //!   tension then falls at once rather than over those nanoseconds.
 //!
-//! **Fragments do not stick back together.** A pair with a failed member passes on only the
-//! compressive pressures of its two particles (`physics::tension_cut`: the tension and the
-//! deviator of the intact side are taken out of the pair's stress terms; the cut is the
-//! pair's, the same from either side, so momentum is exact). Failed particles therefore push
-//! on their neighbours but never pull, and a crack of failed particles cuts the bodies on
-//! either side apart once it is a support wide — the "failed neighbours meet only in
-//! compression" choice, which needs no new contact sets and no change to the neighbour search;
-//! a fragment of undamaged particles keeps its own cohesion. The pair stays in the continuity
-//! equation and the velocity gradient: a failed particle's density follows its neighbours
+//! **Fragments do not stick back together, and a crack stays a crack.** A pair with a failed
+//! member passes on only the compressive pressures of its two particles (`physics::tension_cut`:
+//! the tension and the deviator of the intact side are taken out of the pair's stress terms;
+//! the cut is the pair's, the same from either side, so momentum is exact). So does a pair of
+//! intact particles with a failed particle between them (`physics::severed`: within ¾ of its
+//! spacing of the segment that joins them), so that a crack one particle wide cuts the bodies on
+//! either side apart at once. Where the crack is open (its failed particle at no pressure), the
+//! intact particles also leave the pair out of their continuity and their velocity gradient:
+//! the crack's opening is not their own expansion or strain. Until 2026-11-27 they read it as
+//! theirs, went into 2–4 GPa of tension beside the crack, flowed and failed in turn, and a
+//! failed zone grew from every crack: every particle of the strip of
+//! `examples/jc_failure_tension.toml` failed, where now two cracks of 16 particles cross it.
+//! Where the failed particle is compressed, the rubble carries the load and deforms with its
+//! neighbours, and the pair stays in their kinematics. This is the "failed neighbours meet only
+//! in compression" choice, which needs no new contact sets and no change to the neighbour
+//! search; a fragment of undamaged particles keeps its own cohesion. A failed particle keeps all
+//! its pairs in its own continuity and velocity gradient: its density follows its neighbours
 //! apart as well as together. (Dropping separating pairs altogether, as strike first did, let
 //! the density ratchet up through every rebound, to 1.4 ρ0 and 65 GPa in fragments at rest,
-//! and the pairs' switching made energy: +10 % in `examples/ogive_plate.toml`, 0.67 % now.)
+//! and the pairs' switching made energy: +10 % in `examples/ogive_plate.toml`, 0.67 % then.)
 //!
 //! Two models, each optional per material:
 //! - [`Spall`]: deterministic activation at the spall strength σ_s, then crack growth at the
