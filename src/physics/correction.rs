@@ -286,16 +286,32 @@ fn moments<const D: usize, K: Kernel, const CHECK: bool>(
 /// Whether each of the entries `js` lies in i's support, 0 < r_ij < h_i + h_j, with r² and
 /// the support computed as the rate pass computes them (`physics::particle_rates`), to the
 /// bit: the rate pass trusts this pass's [`Support`]. A coincident neighbour (r = 0) has no
-/// direction and adds nothing. Gathered first, then each loop over the lanes innermost, with
-/// no branch, so that it vectorises (tested one by one with a branch, the skin's entries,
-/// among the support's in no order a branch could predict, cost a third of the pass).
+/// direction and adds nothing. With no branch, so that it vectorises (tested one by one with a
+/// branch, the skin's entries, among the support's in no order a branch could predict, cost a
+/// third of the pass).
 #[inline(always)]
-#[allow(clippy::needless_range_loop)] // index loops over lanes and axes read as the equations
 fn in_support<const D: usize, const N: usize>(
     pi: &Point<D>,
     js: &[u32],
     points: Points<D>,
 ) -> [bool; N] {
+    let (_, r2, hj) = separations::<D, N>(pi, js, points);
+    std::array::from_fn(|l| {
+        let support = pi.h + hj[l];
+        (r2[l] < support * support) & (r2[l] > 0.0)
+    })
+}
+
+/// x_ij, r² and h_j of the entries `js`, one lane each: gathered first, then each loop over
+/// the lanes innermost, so that the arithmetic vectorises.
+#[inline(always)]
+#[allow(clippy::needless_range_loop)] // index loops over lanes and axes read as the equations
+#[allow(clippy::type_complexity)] // three lane arrays
+fn separations<const D: usize, const N: usize>(
+    pi: &Point<D>,
+    js: &[u32],
+    points: Points<D>,
+) -> ([[f64; N]; D], [f64; N], [f64; N]) {
     let mut xj = [[0.0; N]; D];
     let mut hj = [0.0; N];
     for l in 0..N {
@@ -305,17 +321,15 @@ fn in_support<const D: usize, const N: usize>(
         }
         hj[l] = p.h;
     }
+    let mut xij = [[0.0; N]; D];
     let mut r2 = [0.0; N];
     for a in 0..D {
         for l in 0..N {
-            let d = pi.x[a] - xj[a][l];
-            r2[l] += d * d;
+            xij[a][l] = pi.x[a] - xj[a][l];
+            r2[l] += xij[a][l] * xij[a][l];
         }
     }
-    std::array::from_fn(|l| {
-        let support = pi.h + hj[l];
-        (r2[l] < support * support) & (r2[l] > 0.0)
-    })
+    (xij, r2, hj)
 }
 
 /// Sums a full batch of the queue, and moves what was queued past it to the front: the
@@ -369,26 +383,8 @@ fn lanes<const D: usize, K: Kernel, const N: usize>(
     points: Points<D>,
     sums: &mut [[f64; LANES]; 6],
 ) {
-    // Lane arrays, gathered first, then each loop over the lanes innermost.
-    let mut xj = [[0.0; N]; D];
-    let mut hj = [0.0; N];
-    let mut vj = [0.0; N];
-    for l in 0..N {
-        let p = &points.at[js[l] as usize];
-        for a in 0..D {
-            xj[a][l] = p.x[a];
-        }
-        hj[l] = p.h;
-        vj[l] = points.vol[js[l] as usize];
-    }
-    let mut xij = [[0.0; N]; D];
-    let mut r2 = [0.0; N];
-    for a in 0..D {
-        for l in 0..N {
-            xij[a][l] = pi.x[a] - xj[a][l];
-            r2[l] += xij[a][l] * xij[a][l];
-        }
-    }
+    let (xij, r2, hj) = separations::<D, N>(pi, js, points);
+    let vj: [f64; N] = std::array::from_fn(|l| points.vol[js[l] as usize]);
     let r: [f64; N] = std::array::from_fn(|l| r2[l].sqrt());
     let h: [f64; N] = std::array::from_fn(|l| 0.5 * (pi.h + hj[l]));
     let gf = kernel.grad_factors::<D, N>(&r, &h);
