@@ -372,8 +372,9 @@ fn sum_queue<const D: usize, K: Kernel>(
     }
 }
 
-/// One chunk of [`moments`]: straight-line arithmetic over the lanes, no branch, so that it
-/// vectorises (the padding record lies far beyond every support and adds exactly zero).
+/// N of [`moments`]' queued neighbours (one or two chunks of [`LANES`]): straight-line
+/// arithmetic over the lanes, no branch, so that it vectorises (the padding record lies far
+/// beyond every support and adds exactly zero).
 #[inline(always)]
 #[allow(clippy::needless_range_loop)] // index loops over lanes and axes read as the equations
 fn lanes<const D: usize, K: Kernel, const N: usize>(

@@ -1071,8 +1071,9 @@ fn within_support<const D: usize>(gi: &Gather<D>, gk: &Gather<D>) -> bool {
 ///
 /// A crack of failed particles one particle wide then cuts the bodies on either side apart at
 /// once, where before their intact particles pulled each other across it until it was a
-/// support wide. Evaluated with the lower index first, so that both sides of the pair get the same answer to the bit (k is in both
-/// lists: they are complete within the support). ¾ Δp: a crack across a lattice passes within
+/// support wide. Evaluated with the lower index first, so that both sides of the pair get the
+/// same answer to the bit (k is in both lists: they are complete within the support, and the
+/// answer does not depend on the order k comes in). ¾ Δp: a crack across a lattice passes within
 /// Δp/√2 of one of its particles; the intact particles along the crack's face, a spacing off
 /// it, keep their pairs. The idea is the visibility criterion of the element-free Galerkin
 /// method (Belytschko, Lu & Gu 1994, IJNME 37, 229) and Spheral's three-point damaged
