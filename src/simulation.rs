@@ -401,11 +401,12 @@ impl<const D: usize> Simulation<D> {
             ranks.share(out, parts);
             self.exchanging += lap.elapsed().as_secs_f64();
             lap = Instant::now();
-            fallbacks = out.iter().filter(|c| c.fallback).count();
+            fallbacks = out.par_iter().filter(|c| c.fallback).count();
             self.stats.correction_fallbacks += fallbacks as u64;
-            self.corr.extend(self.corrections.iter().map(|c| c.b));
+            self.corr
+                .par_extend(self.corrections.par_iter().map(|c| c.b));
             self.lambda
-                .extend(self.corrections.iter().map(|c| c.lambda_min));
+                .par_extend(self.corrections.par_iter().map(|c| c.lambda_min));
             self.ghosts
                 .extend_to_ghosts_with(&mut self.lambda, &self.symmetry, |l, _| l);
             // A ghost's B is its source's seen in the mirror: M B M, M = I − 2 e_a e_aᵀ.

@@ -165,7 +165,7 @@ pub(crate) fn corrections_on<const D: usize, K: Kernel>(
         }
         correction(kernel, i, list, points, mixed, &joined)
     });
-    out[owned.clone()].iter().filter(|c| c.fallback).count()
+    out[owned.clone()].par_iter().filter(|c| c.fallback).count()
 }
 
 /// [`correction`] compiled for AVX2 (bit-identical: see `physics::wide_lanes`).
