@@ -2,7 +2,7 @@
 //! gather pass over each real particle's neighbours. Per pair, with x_ij = x_i − x_j,
 //! v_ij = v_i − v_j, h_ij = (h_i + h_j)/2 and ∇_i W_ij = (dW/dr) x_ij/r_ij:
 //!
-//! - continuity: dρ_i/dt = Σ_{j∈N_i} m_j v_ij·∇_i W_ij
+//! - continuity: dρ_i/dt = Σ_{j∈N_i} m_j v_ij·∇_i W_ij (CN-SPH: see below)
 //! - velocity gradient: L_i = −Σ_{j∈N_i} V_j v_ij ⊗ ∇_i W_ij
 //! - momentum: dv_i/dt = Σ_{j∈N_i} m_j T_ij ∇_i W_ij + f_c,i/m_i + g,
 //!   T_ij = σ_i/ρ_i² + σ_j/ρ_j² − Π_ij I + A_ij
@@ -20,7 +20,14 @@
 //! (σ_i/ρ_i²) B_i ∇_i W_ij + (σ_j/ρ_j²) B_j ∇_i W_ij, antisymmetric in i and j: linear momentum
 //! is conserved to round-off (3e-15 in the elastic impact), and the pairwise energy equation on
 //! the same force keeps the total energy's discretisation error to the time integration's
-//! (0.81 % drift in the elastic impact at CFL 0.3, conventional 0.73 %). The viscosity keeps the
+//! (0.81 % drift in the elastic impact at CFL 0.3, conventional 0.73 %). CN-SPH's continuity
+//! is dρ_i/dt = ρ_i Σ_j V_j v_ij·∇̃_i W_ij = −ρ_i tr L_i: the density follows the same
+//! consistent velocity gradient as the stress (ρ̇ = −ρ ∇·v exactly for a linear velocity field,
+//! also where the density varies). Conventional SPH's mass-weighted Σ m_j v_ij·∇_i W_ij, the
+//! derivative of the summation density, weighs each neighbour's velocity by ρ_j/ρ_i; with B's
+//! gain on top, a particle expanding among denser neighbours (the 7 km/s demo's jet at
+//! Δp = 10 µm) had its expansion rate multiplied by its own rarefaction and ran away to
+//! 0.014 ρ0 (step 350; now the run goes to step 689). The viscosity keeps the
 //! plain ∇_i W_ij: it is a dissipation, not a consistency term, and a pair's B_j would cost the
 //! pass nine more loads. (σ/ρ²) B is formed once per particle, so that a pair costs CN-SPH
 //! nine more products than conventional SPH; and the correction pass, which tests every entry
@@ -831,7 +838,11 @@ fn particle_rates<const D: usize, K: Kernel, const ART: bool, const CN: bool>(
     let acc = Vector::<D>::from_fn(|k, _| lane_sum(&sums.acc[k]) + cuts.acc[k]);
     ParticleRates {
         acc: acc + fc / mi + model.gravity,
-        drho: lane_sum(&sums.drho) + cuts.drho,
+        drho: if CN {
+            gi.rho * (lane_sum(&sums.drho) + cuts.drho)
+        } else {
+            lane_sum(&sums.drho) + cuts.drho
+        },
         de: lane_sum(&sums.de) + de_contact + cuts.de,
         de_lag: lane_sum(&sums.de_lag) + de_lag_contact + cuts.de_lag,
         grad_v: Tensor::<D>::from_fn(|a, b| lane_sum(&sums.grad_v[a][b]) + cuts.grad_v[a][b]),
@@ -908,7 +919,8 @@ fn conserve_chunk<const D: usize, K: Kernel, const ART: bool, const CN: bool>(
         let v2 = if near { dot(&vij, &vij) } else { 0.0 };
         s.v2_max[l] = s.v2_max[l].max(v2);
         let mj = gj.m;
-        s.drho[l] += mj * dot(&vij, &grad_i);
+        // CN-SPH: ρ_i Σ V_j v_ij·∇̃W, taken times ρ_i at the end (see the module doc).
+        s.drho[l] += if CN { gj.vol } else { mj } * dot(&vij, &grad_i);
         for a in 0..D {
             let va = vij[a] * gj.vol;
             for b in 0..D {
@@ -1122,7 +1134,8 @@ fn severed<const D: usize>(
 }
 
 /// The pair's terms in i's continuity and velocity gradient, as the pass adds them:
-/// (m_j v_ij · ∇̃_i W_ij, −V_j v_ij ⊗ ∇̃_i W_ij), ∇̃ = B_i ∇ in CN-SPH.
+/// (m_j v_ij · ∇̃_i W_ij, −V_j v_ij ⊗ ∇̃_i W_ij), ∇̃ = B_i ∇ in CN-SPH, whose continuity term is
+/// V_j v_ij · ∇̃_i W_ij (times ρ_i with the rest of the sum).
 fn kinematic_terms<const D: usize, K: Kernel, const CN: bool>(
     kernel: K,
     i: usize,
@@ -1147,7 +1160,7 @@ fn kinematic_terms<const D: usize, K: Kernel, const CN: bool>(
         grad
     };
     let vij: [f64; D] = std::array::from_fn(|k| gi.v[k] - gj.v[k]);
-    let drho = gj.m * dot(&vij, &grad_i);
+    let drho = if CN { gj.vol } else { gj.m } * dot(&vij, &grad_i);
     let grad_v = std::array::from_fn(|a| std::array::from_fn(|b| -(vij[a] * gj.vol) * grad_i[b]));
     (drho, grad_v)
 }
