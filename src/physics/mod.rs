@@ -1500,6 +1500,7 @@ shape = { type = "rectangle", min = [0.0, 0.0], max = [8.0e-3, 6.0e-3] }
     /// Σ_j m_j v_ij·∇̃_i W_ij (conventional SPH's form), weighs each neighbour by ρ_j/ρ_i and is
     /// off by percents there.
     #[test]
+    #[allow(clippy::needless_range_loop)] // i indexes the particles' fields, b and the rates
     fn corrected_continuity_follows_the_velocity_gradient() {
         let deck = r#"
 [simulation]
