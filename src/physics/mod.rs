@@ -20,7 +20,16 @@
 //! (σ_i/ρ_i²) B_i ∇_i W_ij + (σ_j/ρ_j²) B_j ∇_i W_ij, antisymmetric in i and j: linear momentum
 //! is conserved to round-off (3e-15 in the elastic impact), and the pairwise energy equation on
 //! the same force keeps the total energy's discretisation error to the time integration's
-//! (0.81 % drift in the elastic impact at CFL 0.3, conventional 0.73 %). CN-SPH's continuity
+//! (0.81 % drift in the elastic impact at CFL 0.3, conventional 0.73 %). The pair's work is
+//! split so that each particle keeps its own correction's: i takes
+//! m_j v_ij·[½ (σ_i/ρ_i² + σ_j/ρ_j²) ∇W + (σ_i/ρ_i²)(B_i − I) ∇W − ½ Π_ij ∇W] and j the
+//! rest, so the total is still exactly conservative, and the split is conventional SPH's where
+//! B = I. Split in halves, a surface particle's large (σ_j/ρ_j²) B_j ∇W went half to its
+//! neighbour: beside the 7 km/s demo's contact rim at Δp = 10 µm it drained neighbours to
+//! −2 × 10⁹ J/kg, and a particle ran away at step 689. (Each particle's energy from its own
+//! corrected stress alone, the σ_i : D_i/ρ_i of DESIGN.md §2, does that too, but it moved the
+//! heat of the plastic strip of `tests/verification_materials.rs` between neighbours and
+//! widened its cracks from 24 to 36 failed particles of 300; this split keeps 24.) CN-SPH's continuity
 //! is dρ_i/dt = ρ_i Σ_j V_j v_ij·∇̃_i W_ij = −ρ_i tr L_i: the density follows the same
 //! consistent velocity gradient as the stress (ρ̇ = −ρ ∇·v exactly for a linear velocity field,
 //! also where the density varies). Conventional SPH's mass-weighted Σ m_j v_ij·∇_i W_ij, the
@@ -836,16 +845,18 @@ fn particle_rates<const D: usize, K: Kernel, const ART: bool, const CN: bool>(
         dt = dt.min(model.cfl * BACKSTOP_STEP * (mi / k_backstop).sqrt());
     }
     let acc = Vector::<D>::from_fn(|k, _| lane_sum(&sums.acc[k]) + cuts.acc[k]);
+    let grad_v = Tensor::<D>::from_fn(|a, b| lane_sum(&sums.grad_v[a][b]) + cuts.grad_v[a][b]);
+    let (drho, grad_v) = if CN {
+        finish_corrected(&pass.corr[i], gi.rho, &grad_v)
+    } else {
+        (lane_sum(&sums.drho) + cuts.drho, grad_v)
+    };
     ParticleRates {
         acc: acc + fc / mi + model.gravity,
-        drho: if CN {
-            gi.rho * (lane_sum(&sums.drho) + cuts.drho)
-        } else {
-            lane_sum(&sums.drho) + cuts.drho
-        },
+        drho,
         de: lane_sum(&sums.de) + de_contact + cuts.de,
         de_lag: lane_sum(&sums.de_lag) + de_lag_contact + cuts.de_lag,
-        grad_v: Tensor::<D>::from_fn(|a, b| lane_sum(&sums.grad_v[a][b]) + cuts.grad_v[a][b]),
+        grad_v,
         contact_force: fc,
         contact_energy: phi,
         dt,
@@ -869,22 +880,24 @@ fn conserve_chunk<const D: usize, K: Kernel, const ART: bool, const CN: bool>(
     let Pass {
         gather,
         art,
-        corr,
         sb,
         model,
         ..
     } = *pass;
     let gi = &gather[i];
-    // CN-SPH: i's B and (σ/ρ²) B, and each lane's neighbour's (σ/ρ²) B, read out (with their
-    // bounds checks) before the lanes' arithmetic, which then vectorises. The neighbours'
-    // are read component by component across the lanes, as x is: copied out matrix by matrix,
-    // they went through the stack in 8-byte stores read back 32 bytes at a time, a stalled
-    // store forward that cost CN-SPH's cubes 5 %.
+    // CN-SPH: i's (σ/ρ²) B, and each lane's neighbour's, read out (with their bounds checks)
+    // before the lanes' arithmetic, which then vectorises. The neighbours' are read component
+    // by component across the lanes, as x is: copied out matrix by matrix, they went through
+    // the stack in 8-byte stores read back 32 bytes at a time, a stalled store forward that
+    // cost CN-SPH's cubes 5 %.
     let zero = [[0.0; D]; D];
-    let (bi, sbi) = if CN {
-        (matrix(&corr[i]), sb[i])
+    let sbi = if CN { sb[i] } else { zero };
+    // CN-SPH's energy split: i's own side of the pair's stress work less half its plain side,
+    // (σ_i/ρ_i²)(B_i − ½ I); the neighbour's plain half is added per pair (see the module doc).
+    let ei: Matrix<D> = if CN {
+        std::array::from_fn(|a| std::array::from_fn(|b| sbi[a][b] - 0.5 * gi.sr2[sym(a, b)]))
     } else {
-        (zero, zero)
+        zero
     };
     let sbj: [[[f64; LANES]; D]; D] = if CN {
         let rows: [&[[f64; D]; D]; LANES] = std::array::from_fn(|l| &sb[js[l] as usize]);
@@ -902,29 +915,22 @@ fn conserve_chunk<const D: usize, K: Kernel, const ART: bool, const CN: bool>(
         let r = r2.sqrt();
         let gf = kernel.grad_factor::<D>(r, hij);
         let grad: [f64; D] = std::array::from_fn(|k| xij[k] * gf);
-        // CN-SPH: i's continuity and velocity gradient use ∇̃_i W_ij = B_i ∇_i W_ij.
-        let grad_i: [f64; D] = if CN {
-            std::array::from_fn(|a| {
-                let mut g = 0.0;
-                for c in 0..D {
-                    g += bi[a][c] * grad[c];
-                }
-                g
-            })
-        } else {
-            grad
-        };
         let vij: [f64; D] = std::array::from_fn(|k| gi.v[k] - gj.v[k]);
         let near = r < 2.0 * hij;
         let v2 = if near { dot(&vij, &vij) } else { 0.0 };
         s.v2_max[l] = s.v2_max[l].max(v2);
         let mj = gj.m;
-        // CN-SPH: ρ_i Σ V_j v_ij·∇̃W, taken times ρ_i at the end (see the module doc).
-        s.drho[l] += if CN { gj.vol } else { mj } * dot(&vij, &grad_i);
+        // CN-SPH's continuity and velocity gradient use ∇̃_i W_ij = B_i ∇_i W_ij: B_i is the
+        // same for every pair of i, so the sum is taken on the plain ∇W and B_i applied once
+        // at the end, L_i = −(Σ_j V_j v_ij ⊗ ∇_i W_ij) B_iᵀ and dρ_i/dt = −ρ_i tr L_i
+        // ([`finish_corrected`]).
+        if !CN {
+            s.drho[l] += mj * dot(&vij, &grad);
+        }
         for a in 0..D {
             let va = vij[a] * gj.vol;
             for b in 0..D {
-                s.grad_v[a][b][l] -= va * grad_i[b];
+                s.grad_v[a][b][l] -= va * grad[b];
             }
         }
         let (pi, mu) = viscosity::monaghan_gingold(
@@ -952,6 +958,8 @@ fn conserve_chunk<const D: usize, K: Kernel, const ART: bool, const CN: bool>(
             }
             t
         });
+        // The part of T_ij ∇W that is not the stresses' (CN-SPH's energy split).
+        let mut rest: [f64; D] = std::array::from_fn(|a| -pi * grad[a]);
         if ART {
             let (ri, rj) = (&art[i], &art[js[l] as usize]);
             let dp = 0.5 * (gi.dp + gj.dp);
@@ -959,20 +967,43 @@ fn conserve_chunk<const D: usize, K: Kernel, const ART: bool, const CN: bool>(
             let fa = f.powi(artificial_stress::EXPONENT);
             for a in 0..D {
                 for b in 0..D {
-                    tg[a] += (ri[(a, b)] + rj[(a, b)]) * fa * grad[b];
+                    let t = (ri[(a, b)] + rj[(a, b)]) * fa * grad[b];
+                    tg[a] += t;
+                    rest[a] += t;
                 }
             }
         }
-        let mut vtg = 0.0;
-        let mut utg = 0.0;
+        // i's share of the pair's work: half of T_ij ∇W; in CN-SPH half of the plain stresses'
+        // and of the rest, and all of i's own correction's, (σ_i/ρ_i²)(B_i − I) ∇W.
+        let eg: [f64; D] = if CN {
+            std::array::from_fn(|a| {
+                let mut t = 0.5 * rest[a];
+                for b in 0..D {
+                    t += (ei[a][b] + 0.5 * gj.sr2[sym(a, b)]) * grad[b];
+                }
+                t
+            })
+        } else {
+            std::array::from_fn(|a| 0.5 * tg[a])
+        };
+        let mut veg = 0.0;
+        let mut ueg = 0.0;
         for a in 0..D {
             s.acc[a][l] += tg[a] * mj;
-            vtg += vij[a] * tg[a];
-            utg += (gi.u[a] - gj.u[a]) * tg[a];
+            veg += vij[a] * eg[a];
+            ueg += (gi.u[a] - gj.u[a]) * eg[a];
         }
-        s.de[l] -= 0.5 * mj * vtg;
-        s.de_lag[l] -= 0.5 * mj * utg;
+        s.de[l] -= mj * veg;
+        s.de_lag[l] -= mj * ueg;
     }
+}
+
+/// CN-SPH's velocity gradient and density rate from the plain sum G_i = −Σ_j V_j v_ij ⊗ ∇_i W_ij
+/// and the correction B_i: L_i = G_i B_iᵀ (so that L_i = −Σ_j V_j v_ij ⊗ B_i ∇_i W_ij) and
+/// dρ_i/dt = −ρ_i tr L_i.
+fn finish_corrected<const D: usize>(b: &Tensor<D>, rho: f64, g: &Tensor<D>) -> (f64, Tensor<D>) {
+    let l = g * b.transpose();
+    (-rho * l.trace(), l)
 }
 
 /// What the cut pairs of a particle take out of its sums (see [`cut_pair`]).
@@ -1046,12 +1077,12 @@ fn cut_pair<const D: usize, K: Kernel, const CN: bool>(
             None => return,
         }
     };
-    let cut = tension_cut::<D, K, CN>(kernel, i, j, xij, pass);
+    let (cut, share) = tension_cut::<D, K, CN>(kernel, i, j, xij, pass);
     let mj = gj.m;
     for a in 0..D {
         cuts.acc[a] -= cut[a] * mj;
-        cuts.de += 0.5 * mj * (gi.v[a] - gj.v[a]) * cut[a];
-        cuts.de_lag += 0.5 * mj * (gi.u[a] - gj.u[a]) * cut[a];
+        cuts.de += mj * (gi.v[a] - gj.v[a]) * share[a];
+        cuts.de_lag += mj * (gi.u[a] - gj.u[a]) * share[a];
     }
     if open {
         let (drho, grad_v) = kinematic_terms::<D, K, CN>(kernel, i, j, xij, pass);
@@ -1147,21 +1178,11 @@ fn kinematic_terms<const D: usize, K: Kernel, const CN: bool>(
     let r = dot(xij, xij).sqrt();
     let gf = kernel.grad_factor::<D>(r, 0.5 * (gi.h + gj.h));
     let grad: [f64; D] = std::array::from_fn(|k| xij[k] * gf);
-    let grad_i: [f64; D] = if CN {
-        let b = matrix(&pass.corr[i]);
-        std::array::from_fn(|a| {
-            let mut g = 0.0;
-            for c in 0..D {
-                g += b[a][c] * grad[c];
-            }
-            g
-        })
-    } else {
-        grad
-    };
     let vij: [f64; D] = std::array::from_fn(|k| gi.v[k] - gj.v[k]);
-    let drho = if CN { gj.vol } else { gj.m } * dot(&vij, &grad_i);
-    let grad_v = std::array::from_fn(|a| std::array::from_fn(|b| -(vij[a] * gj.vol) * grad_i[b]));
+    // CN-SPH: on the plain ∇W, as the pass's sums (B_i comes at the end, `finish_corrected`);
+    // its density rate follows from L.
+    let drho = if CN { 0.0 } else { gj.m * dot(&vij, &grad) };
+    let grad_v = std::array::from_fn(|a| std::array::from_fn(|b| -(vij[a] * gj.vol) * grad[b]));
     (drho, grad_v)
 }
 
@@ -1169,14 +1190,15 @@ fn kinematic_terms<const D: usize, K: Kernel, const CN: bool>(
 /// σ/ρ² (CN-SPH: (σ/ρ²) B) replaced by its tension and deviator, σ/ρ² + max(p, 0)/ρ² I, and
 /// the artificial stress's term — the pair force less this keeps only the compressive
 /// pressures. A failed particle carries no
-/// tension and no deviator (`material::damage`), so its own part is zero.
+/// tension and no deviator (`material::damage`), so its own part is zero. Returns the cut and
+/// i's share of its work, split as the pair's (see `conserve_chunk`).
 fn tension_cut<const D: usize, K: Kernel, const CN: bool>(
     kernel: K,
     i: usize,
     j: usize,
     xij: &[f64; D],
     pass: &Pass<D>,
-) -> [f64; D] {
+) -> ([f64; D], [f64; D]) {
     let (gi, gj) = (&pass.gather[i], &pass.gather[j]);
     let r = dot(xij, xij).sqrt();
     let gf = kernel.grad_factor::<D>(r, 0.5 * (gi.h + gj.h));
@@ -1193,6 +1215,18 @@ fn tension_cut<const D: usize, K: Kernel, const CN: bool>(
         })
     };
     let (ti, tj) = (side(i, gi), side(j, gj));
+    // The plain sides, σ/ρ² + max(p, 0)/ρ² I, for CN-SPH's energy split.
+    let plain = |k: usize, g: &Gather<D>| -> [[f64; D]; D] {
+        let squeeze = pass.pressure[k].max(0.0) / (g.rho * g.rho);
+        std::array::from_fn(|a| {
+            std::array::from_fn(|b| g.sr2[sym(a, b)] + if a == b { squeeze } else { 0.0 })
+        })
+    };
+    let (pi, pj) = if CN {
+        (plain(i, gi), plain(j, gj))
+    } else {
+        ([[0.0; D]; D], [[0.0; D]; D])
+    };
     // The artificial stress (R_i + R_j) f^n exists only against the clumping of particles
     // held in tension: a pair that passes on no tension carries none of it either. (Kept, it
     // pushed rubble off the intact particles beside it, which held their tension and failed in
@@ -1207,16 +1241,23 @@ fn tension_cut<const D: usize, K: Kernel, const CN: bool>(
             &pass.art[j],
         )
     });
-    std::array::from_fn(|a| {
-        let mut t = 0.0;
+    let mut cut = [0.0; D];
+    let mut share = [0.0; D];
+    for a in 0..D {
+        let (mut t, mut rest, mut own) = (0.0, 0.0, 0.0);
         for b in 0..D {
             t += (ti[a][b] + tj[a][b]) * xij[b] * gf;
+            own += (ti[a][b] - 0.5 * pi[a][b] + 0.5 * pj[a][b]) * xij[b] * gf;
             if let Some((fa, ri, rj)) = art {
-                t += (ri[(a, b)] + rj[(a, b)]) * fa * xij[b] * gf;
+                let r = (ri[(a, b)] + rj[(a, b)]) * fa * xij[b] * gf;
+                t += r;
+                rest += r;
             }
         }
-        t
-    })
+        cut[a] = t;
+        share[a] = if CN { own + 0.5 * rest } else { 0.5 * t };
+    }
+    (cut, share)
 }
 
 #[cfg(test)]
@@ -1544,6 +1585,63 @@ shape = { type = "rectangle", min = [0.0, 0.0], max = [8.0e-3, 6.0e-3] }
         );
         assert!(worst.0 < 1e-12, "CN-SPH's continuity: {}", worst.0);
         assert!(worst.1 > 0.02, "the mass-weighted sum: {}", worst.1);
+    }
+
+    /// CN-SPH's energy split (module doc): a particle's energy rate does not take its
+    /// neighbours' corrections B_j, only their plain stresses, so that a surface particle's
+    /// large (σ_j/ρ_j²) B_j ∇W stays out of its neighbours' energy; and the pass still turns
+    /// exactly the forces' power into heat, Σ m_i de_i/dt = −Σ m_i v_i·a_i. On a perturbed block
+    /// under a varying stress and a random motion, scaling one corner's B changes no other
+    /// particle's de/dt (with the pair's work split in halves it changes its neighbours').
+    #[test]
+    fn corrected_energy_keeps_each_correction_with_its_particle() {
+        let (mut p, model) = elastic_block();
+        let mut seed = 11u64;
+        let mut random = || {
+            seed = seed.wrapping_mul(6364136223846793005).wrapping_add(1);
+            (seed >> 11) as f64 / (1u64 << 53) as f64 - 0.5
+        };
+        for i in 0..p.n_real {
+            for k in 0..2 {
+                p.x[i][k] += 2e-4 * random();
+                p.v[i][k] = 20.0 * random();
+            }
+            p.p[i] = 1e8 * (1.0 + 200.0 * p.x[i][0]);
+            p.s[i] = Tensor::<2>::new(1.0, 0.5, 0.5, -1.0) * (3e7 * random());
+        }
+        let mut nl = NeighborList::default();
+        nl.build(&p.x, &p.h, p.n_real, 0.0);
+        let mut c = Vec::new();
+        corrections(CubicSpline, &p, &nl, &model, &(0..p.n_real), &mut c);
+        let mut b: Vec<Tensor<2>> = c.iter().map(|c| c.b).collect();
+        let before = all_rates(&p, &nl, &model, &b);
+        let (heat, work) = (0..p.n_real).fold((0.0, 0.0), |(h, w), i| {
+            let r = &before.particles[i];
+            (h + p.m[i] * r.de, w + p.m[i] * p.v[i].dot(&r.acc))
+        });
+        let scale: f64 = (0..p.n_real)
+            .map(|i| p.m[i] * p.v[i].norm() * before.particles[i].acc.norm())
+            .sum();
+        assert!(
+            (heat + work).abs() < 1e-12 * scale,
+            "heat {heat} against work {work} (of {scale})"
+        );
+        let corner = (0..p.n_real)
+            .min_by(|&i, &j| p.x[i].norm().total_cmp(&p.x[j].norm()))
+            .unwrap();
+        b[corner] *= 1.5;
+        let after = all_rates(&p, &nl, &model, &b);
+        let neighbours: Vec<usize> = nl.list(corner).iter().map(|&j| j as usize).collect();
+        assert!(neighbours.len() > 3);
+        for i in (0..p.n_real).filter(|&i| i != corner) {
+            assert_eq!(
+                before.particles[i].de,
+                after.particles[i].de,
+                "particle {i} (a neighbour of the corner: {})",
+                neighbours.contains(&i)
+            );
+        }
+        assert_ne!(before.particles[corner].de, after.particles[corner].de);
     }
 
     /// Bodies closing on each other through the contact bound the time step by their relative
