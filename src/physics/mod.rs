@@ -892,10 +892,11 @@ fn conserve_chunk<const D: usize, K: Kernel, const ART: bool, const CN: bool>(
     // cost CN-SPH's cubes 5 %.
     let zero = [[0.0; D]; D];
     let sbi = if CN { sb[i] } else { zero };
-    // CN-SPH's energy split: i's own side of the pair's stress work less half its plain side,
-    // (σ_i/ρ_i²)(B_i − ½ I); the neighbour's plain half is added per pair (see the module doc).
+    // CN-SPH's energy split (module doc), doubled: i's side of the pair's stress work counts
+    // 2 (σ_i/ρ_i²) B_i − σ_i/ρ_i², the neighbour's σ_j/ρ_j² (added per pair), and the sum is
+    // halved with the rest's.
     let ei: Matrix<D> = if CN {
-        std::array::from_fn(|a| std::array::from_fn(|b| sbi[a][b] - 0.5 * gi.sr2[sym(a, b)]))
+        std::array::from_fn(|a| std::array::from_fn(|b| 2.0 * sbi[a][b] - gi.sr2[sym(a, b)]))
     } else {
         zero
     };
@@ -973,18 +974,18 @@ fn conserve_chunk<const D: usize, K: Kernel, const ART: bool, const CN: bool>(
                 }
             }
         }
-        // i's share of the pair's work: half of T_ij ∇W; in CN-SPH half of the plain stresses'
-        // and of the rest, and all of i's own correction's, (σ_i/ρ_i²)(B_i − I) ∇W.
+        // i's share of the pair's work is half of eg: eg = T_ij ∇W; in CN-SPH the plain
+        // stresses' and the rest's, and twice i's own correction's, (σ_i/ρ_i²)(B_i − I) ∇W.
         let eg: [f64; D] = if CN {
             std::array::from_fn(|a| {
-                let mut t = 0.5 * rest[a];
+                let mut t = rest[a];
                 for b in 0..D {
-                    t += (ei[a][b] + 0.5 * gj.sr2[sym(a, b)]) * grad[b];
+                    t += (ei[a][b] + gj.sr2[sym(a, b)]) * grad[b];
                 }
                 t
             })
         } else {
-            std::array::from_fn(|a| 0.5 * tg[a])
+            tg
         };
         let mut veg = 0.0;
         let mut ueg = 0.0;
@@ -993,8 +994,8 @@ fn conserve_chunk<const D: usize, K: Kernel, const ART: bool, const CN: bool>(
             veg += vij[a] * eg[a];
             ueg += (gi.u[a] - gj.u[a]) * eg[a];
         }
-        s.de[l] -= mj * veg;
-        s.de_lag[l] -= mj * ueg;
+        s.de[l] -= 0.5 * mj * veg;
+        s.de_lag[l] -= 0.5 * mj * ueg;
     }
 }
 
