@@ -337,7 +337,8 @@ fn johnson_cook_failure_in_plane_strain_compression() {
 /// Δp = 0.1 mm, by two crossing shear bands at 0.05 mm. Measured on 2026-11-27 (failed of the
 /// strip; failed of 8 nearest; the end pieces' speeds): conventional SPH 16 of 300, 1.75,
 /// ∓10.01 m/s at 0.1 mm and 98 of 1200, 3.71, −9.40 / +9.60 m/s at 0.05 mm; CN-SPH 24 of 300,
-/// 2.17, ∓10.03 m/s and 116 of 1200, 6.40, −9.06 / +11.46 m/s. CN-SPH's crack at 0.05 mm is
+/// 2.17, ∓10.05 m/s and 99 of 1200, 6.18, −11.40 / +10.76 m/s (116 and 6.40 before CN-SPH's
+/// energy split changed, the same day). CN-SPH's crack at 0.05 mm is
 /// a band 3 to 4 particles wide (README, Not yet), and CN-SPH runs here at 0.1 mm only. Before 2026-11-27 the cracks' intact
 /// neighbours read their opening as their own expansion (continuity) and strain (velocity
 /// gradient), went into 2–4 GPa of tension and failed in turn: 288 of the strip's 300

@@ -907,6 +907,12 @@ fn conserve_chunk<const D: usize, K: Kernel, const ART: bool, const CN: bool>(
         [[[0.0; LANES]; D]; D]
     };
     let g: [&Gather<D>; LANES] = std::array::from_fn(|l| &gather[js[l] as usize]);
+    // CN-SPH's energy split reads the neighbours' plain σ/ρ², likewise across the lanes.
+    let srj: [[f64; LANES]; 6] = if CN {
+        std::array::from_fn(|k| std::array::from_fn(|l| g[l].sr2[k]))
+    } else {
+        [[0.0; LANES]; 6]
+    };
     let (alpha, beta) = (model.alpha, model.beta);
     for l in 0..LANES {
         let gj = g[l];
@@ -980,7 +986,7 @@ fn conserve_chunk<const D: usize, K: Kernel, const ART: bool, const CN: bool>(
             std::array::from_fn(|a| {
                 let mut t = rest[a];
                 for b in 0..D {
-                    t += (ei[a][b] + gj.sr2[sym(a, b)]) * grad[b];
+                    t += (ei[a][b] + srj[sym(a, b)][l]) * grad[b];
                 }
                 t
             })
