@@ -29,22 +29,23 @@
 //! −2 × 10⁹ J/kg, and a particle ran away at step 689. (Each particle's energy from its own
 //! corrected stress alone, the σ_i : D_i/ρ_i of DESIGN.md §2, does that too, but it moved the
 //! heat of the plastic strip of `tests/verification_materials.rs` between neighbours and
-//! widened its cracks from 24 to 36 failed particles of 300; this split keeps 24.) CN-SPH's continuity
-//! is dρ_i/dt = ρ_i Σ_j V_j v_ij·∇̃_i W_ij = −ρ_i tr L_i: the density follows the same
-//! consistent velocity gradient as the stress (ρ̇ = −ρ ∇·v exactly for a linear velocity field,
-//! also where the density varies). Conventional SPH's mass-weighted Σ m_j v_ij·∇_i W_ij, the
-//! derivative of the summation density, weighs each neighbour's velocity by ρ_j/ρ_i; with B's
-//! gain on top, a particle expanding among denser neighbours (the 7 km/s demo's jet at
-//! Δp = 10 µm) had its expansion rate multiplied by its own rarefaction and ran away to
-//! 0.014 ρ0 (step 350; now the run goes to step 689). The viscosity keeps the
-//! plain ∇_i W_ij: it is a dissipation, not a consistency term, and a pair's B_j would cost the
-//! pass nine more loads. (σ/ρ²) B is formed once per particle, so that a pair costs CN-SPH
-//! nine more products than conventional SPH; and the correction pass, which tests every entry
-//! of a particle's list against the support anyway, hands the rate pass the entries inside
-//! ([`correction::Support`]), so that CN-SPH's rate pass skips the filter that is 30 % of the
-//! conventional one. Angular momentum is not conserved exactly in
-//! either formulation. The contact acts along the contact normal from the boundary particles
-//! (see [`colour::states`]), with either contact law.
+//! widened its cracks from 24 to 36 failed particles of 300; this split keeps 24.)
+//! CN-SPH's continuity is dρ_i/dt = ρ_i Σ_j V_j v_ij·∇̃_i W_ij = −ρ_i tr L_i: the density
+//! follows the same consistent velocity gradient as the stress (ρ̇ = −ρ ∇·v exactly for a
+//! linear velocity field, also where the density varies). Conventional SPH's mass-weighted
+//! Σ m_j v_ij·∇_i W_ij, the derivative of the summation density, weighs each neighbour's
+//! velocity by ρ_j/ρ_i; with B's gain on top, a particle expanding among denser neighbours (the
+//! 7 km/s demo's jet at Δp = 10 µm) had its expansion rate multiplied by its own rarefaction
+//! and ran away to 0.014 ρ0 (step 350). B_i, the same for all of i's pairs, is applied once to
+//! the sum, L_i = −(Σ_j V_j v_ij ⊗ ∇_i W_ij) B_iᵀ. The viscosity keeps the plain ∇_i W_ij: it
+//! is a dissipation, not a consistency term, and a pair's B_j would cost the pass nine more
+//! loads. (σ/ρ²) B is formed once per particle, so that a pair costs CN-SPH nine more products
+//! than conventional SPH (the energy split's); and the correction pass, which tests every
+//! entry of a particle's list against the support anyway, hands the rate pass the entries
+//! inside ([`correction::Support`]), so that CN-SPH's rate pass skips the filter that is 30 %
+//! of the conventional one. Angular momentum is not conserved exactly in either formulation.
+//! The contact acts along the contact normal from the boundary particles (see
+//! [`colour::states`]), with either contact law.
 
 pub mod artificial_stress;
 pub mod correction;
@@ -1229,7 +1230,7 @@ fn tension_cut<const D: usize, K: Kernel, const CN: bool>(
             std::array::from_fn(|b| g.sr2[sym(a, b)] + if a == b { squeeze } else { 0.0 })
         })
     };
-    let (pi, pj) = if CN {
+    let (plain_i, plain_j) = if CN {
         (plain(i, gi), plain(j, gj))
     } else {
         ([[0.0; D]; D], [[0.0; D]; D])
@@ -1254,7 +1255,7 @@ fn tension_cut<const D: usize, K: Kernel, const CN: bool>(
         let (mut t, mut rest, mut own) = (0.0, 0.0, 0.0);
         for b in 0..D {
             t += (ti[a][b] + tj[a][b]) * xij[b] * gf;
-            own += (ti[a][b] - 0.5 * pi[a][b] + 0.5 * pj[a][b]) * xij[b] * gf;
+            own += (ti[a][b] - 0.5 * plain_i[a][b] + 0.5 * plain_j[a][b]) * xij[b] * gf;
             if let Some((fa, ri, rj)) = art {
                 let r = (ri[(a, b)] + rj[(a, b)]) * fa * xij[b] * gf;
                 t += r;
