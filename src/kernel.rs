@@ -114,7 +114,7 @@ impl Kernel for CubicSpline {
         Self::grad_factor_impl::<D>(r, h)
     }
 
-    /// [`CubicSpline::grad_factor_impl`]'s operations, each over all `L` pairs.
+    /// `CubicSpline::grad_factor_impl`'s operations, each over all `L` pairs.
     #[inline(always)]
     fn grad_factors<const D: usize, const L: usize>(&self, r: &[f64; L], h: &[f64; L]) -> [f64; L] {
         let d: [f64; L] = std::array::from_fn(|l| 1.0 / (r[l] * h[l]));

@@ -208,7 +208,7 @@ impl<const D: usize> Particles<D> {
         for_each_field!(copy_many);
     }
 
-    /// Reorder real particles by `order` (new position k holds old particle order[k]).
+    /// Reorder real particles by `order` (new position k holds old particle `order[k]`).
     pub fn permute(&mut self, order: &[usize]) {
         fn apply<T: Copy>(v: &mut Vec<T>, order: &[usize]) {
             // The capacity stays, room for the ghosts included.

@@ -20,8 +20,8 @@ impl HistoryWriter {
     /// internal_energy, contact_energy, gravity_energy, total_energy, momentum_x/y/z,
     /// max_pressure, min_interbody_distance (/Δp_avg; empty with no contact pair in range),
     /// failed_particles (damage 1),
-    /// contact_force_<body>_x/y/z for each body, and penetration_<a>_<b> (Δp_avg) and
-    /// mixed_<a>_<b> for each pair of bodies (see `mixing`).
+    /// `contact_force_<body>_x/y/z` for each body, and `penetration_<a>_<b>` (Δp_avg) and
+    /// `mixed_<a>_<b>` for each pair of bodies (see `mixing`).
     pub fn create(path: &Path, body_names: &[String]) -> Result<Self> {
         let file = File::create(path).map_err(|e| Error::io(path, e))?;
         let mut w = HistoryWriter {

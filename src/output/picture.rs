@@ -58,7 +58,7 @@ fn color_value<const D: usize>(p: &Particles<D>, i: usize, color_by: ColorBy) ->
     }
 }
 
-/// Particles in the slab |x[normal] - position| < thickness/2 (3D); all real particles in 2D.
+/// Particles in the slab |x_normal − position| < thickness/2 (3D); all real particles in 2D.
 /// Points are the two in-plane coordinates (for normal y in 3D: (x, z); normal x: (y, z);
 /// normal z: (x, y)); values per ColorBy (Body: body index as f64; Pressure; PlasticStrain;
 /// Velocity: |v|; Density; VonMises).

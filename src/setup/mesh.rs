@@ -10,7 +10,7 @@
 //! independent of the triangles' orientation (an inside-out export fills the same).
 //!
 //! **Fast evaluation.** The triangles are sorted into a bounding-sphere tree; a cluster seen
-//! from more than [`FAR`] times its radius contributes its dipole term, N·(c − p) / |c − p|³
+//! from more than `FAR` times its radius contributes its dipole term, N·(c − p) / |c − p|³
 //! with N = Σ A_t n_t its vector area and c its area-weighted centre (Barill et al. 2018, first
 //! order). Its error falls off slowly with the distance: inside a 2 208-triangle sphere w reads
 //! 1.025 at the centre with clusters taken from 2 radii, 1.013 from 3, 1.004 from 4 and
