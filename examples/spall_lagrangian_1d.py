@@ -36,7 +36,8 @@ def pressure(rho, e):
 
 
 def free_face(sigma_s, dx, strength=True, cfl=0.3):
-    """The target's free-face velocity history [(t, u)]."""
+    """The target's free-face velocity history [(t, u)], and where its failed cells started
+    (their centres' material coordinate x0 from the impact face)."""
     nf, nt = round(FLYER / dx), round(TARGET / dx)
     n = nf + nt
     x = np.arange(n + 1) * dx - FLYER
@@ -71,7 +72,8 @@ def free_face(sigma_s, dx, strength=True, cfl=0.3):
         failed |= (-pressure(rho, e) + s) > sigma_s
         t += dt
         trace.append((t, u[-1]))
-    return trace
+    x0 = (np.arange(n) + 0.5) * dx - FLYER
+    return trace, x0[failed & (x0 > 0.0)]
 
 
 def pull_back(trace):
@@ -100,14 +102,17 @@ def main():
     c_l = np.sqrt(C0**2 + (0.0 if a.hydro else 4.0 / 3.0 * G / RHO0))
     for sigma in (float(v) * 1e9 for v in a.strengths_gpa.split(",")):
         for dx in (float(v) * 1e-6 for v in a.cells_um.split(",")):
-            u_max, u_min = pull_back(free_face(sigma, dx, strength=not a.hydro))
+            trace, failed_x0 = free_face(sigma, dx, strength=not a.hydro)
+            u_max, u_min = pull_back(trace)
+            plane = failed_x0.mean() if failed_x0.size else float("nan")
             read_l = 0.5 * RHO0 * c_l * (u_max - u_min)
             read_0 = 0.5 * RHO0 * C0 * (u_max - u_min)
             print(
                 f"sigma_s {sigma / 1e9:.2f} GPa, dx {dx * 1e6:g} um: u_max {u_max:.1f}, "
                 f"u_min {u_min:.1f} m/s; by c_L {read_l / 1e9:.3f} GPa "
                 f"({100 * (read_l / sigma - 1):+.1f} %), by c0 {read_0 / 1e9:.3f} GPa "
-                f"({100 * (read_0 / sigma - 1):+.1f} %)"
+                f"({100 * (read_0 / sigma - 1):+.1f} %); spall plane (mean x0 of the failed cells) "
+                f"{plane * 1e3:.4f} mm"
             )
 
 

@@ -283,7 +283,7 @@ pub fn cases() -> Vec<CaseDef> {
         },
         CaseDef {
             name: "spall",
-            title: "Flyer-plate spall: pull-back against the set spall strength (VALIDATION.md §F)",
+            title: "Flyer-plate spall: pull-back against the set spall strength (VALIDATION.md §F), the free face and the spall plane against an independent 1D Lagrangian solution",
             run: spall,
         },
         CaseDef {
@@ -811,10 +811,13 @@ pub fn energy(fine: bool) -> Result<Outcome> {
 }
 
 /// What a flyer-plate run shows: the target's free-face velocity history (t, u_fs), the x of
-/// its failed particles at the end, and the largest relative momentum error along x.
+/// its failed particles at the end, where they started (their material coordinate, which does
+/// not move as the spalled layers open and fly apart), and the largest relative momentum error
+/// along x.
 pub struct SpallRun {
     pub free_face: Vec<(f64, f64)>,
     pub failed_x: Vec<f64>,
+    pub failed_x0: Vec<f64>,
     pub momentum_error: f64,
 }
 
@@ -828,6 +831,11 @@ pub fn spall_run(case: &Case) -> Result<SpallRun> {
     let mut free_face = Vec::new();
     let mut momentum_error: f64 = 0.0;
     let mut p0 = None;
+    let ids = sim.particles.id.iter().max().map_or(0, |&m| m as usize + 1);
+    let mut start = vec![0.0; ids];
+    for i in 0..sim.particles.n_real {
+        start[sim.particles.id[i] as usize] = sim.particles.x[i][0];
+    }
     while sim.state.time < end * (1.0 - 1e-12) {
         let d = sim.step(end - sim.state.time)?;
         let p0 = *p0.get_or_insert(d.momentum);
@@ -845,13 +853,13 @@ pub fn spall_run(case: &Case) -> Result<SpallRun> {
         free_face.push((sim.state.time, sum / n));
     }
     let p = &sim.particles;
-    let failed_x = (0..p.n_real)
+    let failed: Vec<usize> = (0..p.n_real)
         .filter(|&i| p.body[i] == target && p.damage[i] >= 1.0)
-        .map(|i| p.x[i][0])
         .collect();
     Ok(SpallRun {
         free_face,
-        failed_x,
+        failed_x: failed.iter().map(|&i| p.x[i][0]).collect(),
+        failed_x0: failed.iter().map(|&i| start[p.id[i] as usize]).collect(),
         momentum_error,
     })
 }
@@ -880,14 +888,36 @@ pub fn pull_back(free_face: &[(f64, f64)]) -> (f64, f64) {
     (u_max, u_min)
 }
 
+/// The converged solution of `examples/spall.toml` by an independent code,
+/// `examples/spall_lagrangian_1d.py` (1D Lagrangian finite differences, the same EOS, strength
+/// and spall strength, a cell failing the instant σ_xx passes σ_s) at 1 µm cells; 0.5–5 µm
+/// cells give the same to 0.3 %: the free face's peak and pull-back minimum (m/s, as
+/// [`pull_back`] reads them) and the spall plane, the failed cells' mean material coordinate
+/// from the impact face (m).
+pub const SPALL_LAGRANGIAN_1D: (f64, f64, f64) = (386.4, 265.3, 2.4625e-3);
+
+/// The mean of the failed particles' material coordinates (where they started) along x, or
+/// NaN when none failed: the spall plane. Their current places are no measure of it, since
+/// the spalled layers open and fly apart at speeds that depend on how the cracks open.
+pub fn spall_plane(run: &SpallRun) -> f64 {
+    run.failed_x0.iter().sum::<f64>() / run.failed_x0.len() as f64
+}
+
 /// Spall (`examples/spall.toml`: Al 6061-T6, σ_s = 1.0 GPa, a 0.5 mm flyer at 400 m/s on a
-/// 3 mm target): the free-face pull-back gives back the set strength, ½ ρ0 c_L Δu_fs, within
-/// 10 %; the spall plane lies one flyer thickness inside the free face (2.5 mm from the impact
-/// face), within 10 %. Δp = 20 µm, and 10 µm with `fine`. (The acoustic relation's speed is
-/// c_L: a 1 GPa decrement lies in the elastic release range, see the test.)
+/// 3 mm target), at Δp = 20 µm, and 10 µm with `fine`:
+/// - the free-face pull-back gives back the set strength, ½ ρ0 c_L Δu_fs, within 10 %
+///   (VALIDATION.md; the acoustic relation's speed is c_L: a 1 GPa decrement lies in the
+///   elastic release range, see the test). The relation itself reads +4.9 % on the converged
+///   independent solution, so this check bounds the relation's error and SPH's together;
+/// - SPH's solution itself against the independent one ([`SPALL_LAGRANGIAN_1D`]): the free
+///   face's peak and pull-back minimum within 8 %, each converging, and the spall plane, the
+///   failed particles' mean material coordinate, within 2 % (the acoustic estimate, one
+///   flyer thickness inside the free face, is 2.5 mm).
 pub fn spall(fine: bool) -> Result<Outcome> {
     let (rho0, sigma_s) = (2703.0, 1.0e9);
     let c0 = ((rho0 * 5240.0f64.powi(2) + 4.0 / 3.0 * 27.6e9) / rho0).sqrt();
+    let (u_max_ref, u_min_ref, plane_ref) = SPALL_LAGRANGIAN_1D;
+    let reference = "examples/spall_lagrangian_1d.py, 1 µm cells";
     let mut checks = Vec::new();
     let mut figures = Vec::new();
     let base = example("spall")?;
@@ -911,16 +941,29 @@ pub fn spall(fine: bool) -> Result<Outcome> {
             )
             .within(sigma_s, 0.10),
         );
-        let plane = run.failed_x.iter().sum::<f64>() / run.failed_x.len().max(1) as f64;
+        checks.push(
+            Check::new("free-face peak", setting.clone(), u_max, "m/s", reference)
+                .within(u_max_ref, 0.08),
+        );
         checks.push(
             Check::new(
-                "spall plane from the impact face",
-                setting,
-                plane,
-                "m",
-                "one flyer thickness inside the free face (acoustic)",
+                "free-face pull-back minimum",
+                setting.clone(),
+                u_min,
+                "m/s",
+                reference,
             )
-            .within(2.5e-3, 0.10),
+            .within(u_min_ref, 0.08),
+        );
+        checks.push(
+            Check::new(
+                "spall plane (failed particles' material coordinate)",
+                setting,
+                spall_plane(&run),
+                "m",
+                reference,
+            )
+            .within(plane_ref, 0.02),
         );
         let t: Vec<f64> = run.free_face.iter().map(|r| r.0 * 1e6).collect();
         let u: Vec<f64> = run.free_face.iter().map(|r| r.1).collect();
@@ -933,7 +976,12 @@ pub fn spall(fine: bool) -> Result<Outcome> {
                 "free-face velocity (m/s)".into(),
                 vec![
                     (format!("strike, Δp = {} µm", dp * 1e6), u),
-                    ("pull-back of σ_s".into(), vec![expected_min; t.len()]),
+                    (
+                        "pull-back of σ_s (acoustic)".into(),
+                        vec![expected_min; t.len()],
+                    ),
+                    ("1D Lagrangian peak".into(), vec![u_max_ref; t.len()]),
+                    ("1D Lagrangian minimum".into(), vec![u_min_ref; t.len()]),
                 ],
             )],
         });

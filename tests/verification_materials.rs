@@ -2,7 +2,7 @@
 
 use strike::case::Case;
 use strike::simulation::Simulation;
-use strike::validate::{pull_back, spall_run};
+use strike::validate::{pull_back, spall_plane, spall_run, SPALL_LAGRANGIAN_1D};
 
 mod support;
 use support::validated;
@@ -32,51 +32,66 @@ fn two_resolutions(name: &str) -> [Case; 2] {
 /// elastic release range 2 HEL ≈ 1.2 GPa of Al 6061-T6 (Kanel 2010, Int. J. Fract. 163, 173,
 /// on the acoustic approximation). With the bulk speed 5240 m/s the same runs read 0.81 GPa.
 ///
-/// The spall plane lies where the free face's reflected release meets the pulse's tail, about
-/// one flyer thickness (0.5 mm) inside the free face. The same run with damage off shows the
-/// diagnostic sees the difference: the free face then falls back towards rest.
+/// SPH's own solution is held against an independent one of the same deck,
+/// `examples/spall_lagrangian_1d.py` converged at 1 µm cells (`SPALL_LAGRANGIAN_1D`): the free
+/// face's peak and pull-back minimum within 8 % and closer at the finer spacing (the kernel
+/// rounds off the short peak: 365 / 374 m/s at 20 / 10 µm, 384 at 5 µm, against 386.4), and
+/// the spall plane within 2 %. The plane is where the failed particles started (their
+/// material coordinate): where they are at the end is no measure of it, since the spalled
+/// layers open and fly apart (+3.5 / +5.0 % at 20 / 10 µm by their current places, the
+/// independent solution's own +3.4–3.8 %). The same run with damage off shows the diagnostic
+/// sees the difference: the free face then falls back towards rest.
 #[test]
 fn flyer_plate_spall_gives_back_the_spall_strength() {
     let (rho0, sigma_s) = (2703.0, 1.0e9);
     let c0 = ((rho0 * 5240.0f64.powi(2) + 4.0 / 3.0 * 27.6e9) / rho0).sqrt();
-    let plane_expected = 2.5e-3;
+    let (u_max_ref, u_min_ref, plane_ref) = SPALL_LAGRANGIAN_1D;
     let mut results = Vec::new();
     for case in two_resolutions("spall") {
         let dp = case.bodies[1].spacing;
         let run = spall_run(&case).unwrap();
         let (u_max, u_min) = pull_back(&run.free_face);
         let sigma = 0.5 * rho0 * c0 * (u_max - u_min);
-        let plane = run.failed_x.iter().sum::<f64>() / run.failed_x.len().max(1) as f64;
+        let plane = spall_plane(&run);
         println!(
-            "spall, Δp = {dp:.1e} m: u_fs max {u_max:.1} m/s, pull-back to {u_min:.1} m/s, ½ ρ0 c0 Δu = {:.3} GPa (set {:.3}), {:+.2} %; {} failed particles, spall plane at {:.3} mm (expected {:.3}); momentum {:.1e}",
+            "spall, Δp = {dp:.1e} m: u_fs max {u_max:.1} m/s ({:+.2} %), pull-back to {u_min:.1} m/s ({:+.2} %), ½ ρ0 c0 Δu = {:.3} GPa (set {:.3}), {:+.2} %; {} failed particles, spall plane at {:.4} mm ({:+.2} %); momentum {:.1e}",
+            100.0 * (u_max / u_max_ref - 1.0),
+            100.0 * (u_min / u_min_ref - 1.0),
             sigma * 1e-9,
             sigma_s * 1e-9,
             100.0 * (sigma / sigma_s - 1.0),
             run.failed_x.len(),
             plane * 1e3,
-            plane_expected * 1e3,
+            100.0 * (plane / plane_ref - 1.0),
             run.momentum_error
         );
-        results.push((u_max, sigma, plane, run));
+        results.push((u_max, u_min, sigma, plane, run));
     }
-    for (u_max, sigma, plane, run) in results {
-        // 2 u_p = 400 m/s, less what the elastic release took off the pulse's peak.
-        assert!(u_max > 340.0 && u_max < 410.0, "free face peak {u_max}");
+    let error = |x: f64, reference: f64| (x / reference - 1.0).abs();
+    for (u_max, u_min, sigma, plane, run) in &results {
+        assert!(error(*u_max, u_max_ref) < 0.08, "free face peak {u_max}");
+        assert!(error(*u_min, u_min_ref) < 0.08, "pull-back minimum {u_min}");
         assert!(
             (sigma / sigma_s - 1.0).abs() < 0.10,
             "spall strength from the pull-back {sigma:.3e} vs {sigma_s:.3e}"
         );
         assert!(!run.failed_x.is_empty(), "the target did not spall");
-        assert!(
-            (plane - plane_expected).abs() < 0.25e-3,
-            "spall plane at {plane}"
-        );
+        assert!(error(*plane, plane_ref) < 0.02, "spall plane at {plane}");
         assert!(
             run.momentum_error < 1e-10,
             "momentum {}",
             run.momentum_error
         );
     }
+    let (coarse, fine) = (&results[0], &results[1]);
+    assert!(
+        error(fine.0, u_max_ref) < error(coarse.0, u_max_ref),
+        "the free face's peak does not converge"
+    );
+    assert!(
+        error(fine.1, u_min_ref) < error(coarse.1, u_min_ref),
+        "the pull-back minimum does not converge"
+    );
     // Without damage the target holds the tension and the free face falls back to rest.
     let mut intact = load("spall");
     intact.materials[0].damage = Default::default();
