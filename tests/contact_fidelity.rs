@@ -169,6 +169,65 @@ shape = { type = "box", min = [-0.004, -0.004, -0.004], max = [0.003, 0.003, 0.0
     }
 }
 
+/// Rubble is part of no body (`strike::mixing`): a particle of body a pushed 0.08 Δp past body
+/// b's surface layer counts as mixed while the particles of a around it are intact, and not
+/// once they have all failed: it is then a fragment amid a's rubble, as in the CN-SPH demo's
+/// debris cloud at 0.1 µs, where a sphere particle with 43 failed neighbours and an intact
+/// colour of its own body of 0.22–0.30 (a fragment's) flew 0.04 Δp past a plate fragment.
+/// Nor does it count once it has failed itself.
+#[test]
+fn mixing_counts_no_rubble_as_a_body() {
+    let case = parse(
+        r#"
+[simulation]
+dimension = 2
+end_time = 1.0
+[materials.al]
+library = "al_6061_t6"
+damage = { type = "none" }
+[[body]]
+name = "a"
+material = "al"
+spacing = 1.0e-3
+shape = { type = "rectangle", min = [0.0, 0.01], max = [0.02, 0.02] }
+[[body]]
+name = "b"
+material = "al"
+spacing = 1.0e-3
+shape = { type = "rectangle", min = [0.0, 0.0], max = [0.02, 0.01] }
+"#,
+    );
+    let mixing = |fail_a: bool, fail_i: bool| {
+        let mut sim = Simulation::<2>::new(&case).unwrap();
+        let p = &mut sim.particles;
+        // The particle of a's lowest layer at x = 10.5 mm, moved into a gap of b's top layer
+        // (y = 9.5 mm), 0.08 Δp past it.
+        let i = (0..p.n_real)
+            .find(|&k| p.body[k] == 0 && (p.x[k][0] - 10.5e-3).abs() < 1e-6 && p.x[k][1] < 10.6e-3)
+            .unwrap();
+        // a's lowest layer half a spacing closer to b, so that i keeps its own body around it.
+        for k in 0..p.n_real {
+            if p.body[k] == 0 && p.x[k][1] < 10.6e-3 {
+                p.x[k][1] -= 0.5e-3;
+            }
+        }
+        p.x[i][0] = 10.0e-3;
+        p.x[i][1] = 9.42e-3;
+        for k in 0..p.n_real {
+            if p.body[k] == 0 && ((k != i && fail_a) || (k == i && fail_i)) {
+                p.damage[k] = 1.0;
+            }
+        }
+        let d = sim.step(1e-30).unwrap();
+        (d.mixing[0].penetration, d.mixing[0].mixed)
+    };
+    let (pen, mixed) = mixing(false, false);
+    println!("a particle 0.08 Δp past the other's surface: penetration {pen:.3} Δp, {mixed} mixed");
+    assert!(mixed >= 1 && (0.05..0.12).contains(&pen), "{pen} {mixed}");
+    assert_eq!(mixing(true, false), (0.0, 0), "a fragment amid rubble");
+    assert_eq!(mixing(false, true), (0.0, 0), "a failed particle");
+}
+
 /// Two lone particles of different bodies meeting head-on at ±1 km/s: a single particle's
 /// colour stays below that of touching (V W(0) < c0), so only [`colour::backstop`] stands
 /// between them. They must turn back no closer than 0.5 Δp, never cross, and leave at the
