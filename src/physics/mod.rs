@@ -1210,26 +1210,26 @@ fn tension_cut<const D: usize, K: Kernel, const CN: bool>(
     let (gi, gj) = (&pass.gather[i], &pass.gather[j]);
     let r = dot(xij, xij).sqrt();
     let gf = kernel.grad_factor::<D>(r, 0.5 * (gi.h + gj.h));
-    let side = |k: usize, g: &Gather<D>| -> [[f64; D]; D] {
-        let squeeze = pass.pressure[k].max(0.0) / (g.rho * g.rho);
+    let squeeze = |k: usize, g: &Gather<D>| pass.pressure[k].max(0.0) / (g.rho * g.rho);
+    // A side on the plain ∇W, σ/ρ² + max(p, 0)/ρ² I: conventional SPH's, and the plain sides
+    // of CN-SPH's energy split.
+    let plain = |k: usize, g: &Gather<D>| -> [[f64; D]; D] {
+        let s = squeeze(k, g);
         std::array::from_fn(|a| {
-            std::array::from_fn(|b| {
-                if CN {
-                    pass.sb[k][a][b] + squeeze * pass.corr[k][(a, b)]
-                } else {
-                    g.sr2[sym(a, b)] + if a == b { squeeze } else { 0.0 }
-                }
-            })
+            std::array::from_fn(|b| g.sr2[sym(a, b)] + if a == b { s } else { 0.0 })
         })
+    };
+    let side = |k: usize, g: &Gather<D>| -> [[f64; D]; D] {
+        if CN {
+            let s = squeeze(k, g);
+            std::array::from_fn(|a| {
+                std::array::from_fn(|b| pass.sb[k][a][b] + s * pass.corr[k][(a, b)])
+            })
+        } else {
+            plain(k, g)
+        }
     };
     let (ti, tj) = (side(i, gi), side(j, gj));
-    // The plain sides, σ/ρ² + max(p, 0)/ρ² I, for CN-SPH's energy split.
-    let plain = |k: usize, g: &Gather<D>| -> [[f64; D]; D] {
-        let squeeze = pass.pressure[k].max(0.0) / (g.rho * g.rho);
-        std::array::from_fn(|a| {
-            std::array::from_fn(|b| g.sr2[sym(a, b)] + if a == b { squeeze } else { 0.0 })
-        })
-    };
     let (plain_i, plain_j) = if CN {
         (plain(i, gi), plain(j, gj))
     } else {
