@@ -101,12 +101,8 @@ fn max_penetration(rows: &[Diagnostics]) -> (f64, u64) {
 // ---------------------------------------------------------------------------------------------
 // The mixing diagnostic
 
-/// Zero for bodies touching along a face (2D) and at the corners and edges of a cube resting on
-/// a plate (3D), and for the paper's demonstration at t = 0.
-#[test]
-fn mixing_is_zero_for_bodies_that_touch() {
-    let face = parse(
-        r#"
+/// Two 2D plates of 20 × 10 spacings touching along a face: a below, b above.
+const FACE: &str = r#"
 [simulation]
 dimension = 2
 end_time = 1.0
@@ -122,8 +118,13 @@ name = "b"
 material = "al"
 spacing = 1.0e-3
 shape = { type = "rectangle", min = [0.0, 0.01], max = [0.02, 0.02] }
-"#,
-    );
+"#;
+
+/// Zero for bodies touching along a face (2D) and at the corners and edges of a cube resting on
+/// a plate (3D), and for the paper's demonstration at t = 0.
+#[test]
+fn mixing_is_zero_for_bodies_that_touch() {
+    let face = parse(FACE);
     let corner = parse(
         r#"
 [simulation]
@@ -169,52 +170,35 @@ shape = { type = "box", min = [-0.004, -0.004, -0.004], max = [0.003, 0.003, 0.0
     }
 }
 
-/// Rubble is part of no body (`strike::mixing`): a particle of body a pushed 0.08 Δp past body
-/// b's surface layer counts as mixed while the particles of a around it are intact, and not
-/// once they have all failed: it is then a fragment amid a's rubble, as in the CN-SPH demo's
-/// debris cloud at 0.1 µs, where a sphere particle with 43 failed neighbours and an intact
-/// colour of its own body of 0.22–0.30 (a fragment's) flew 0.04 Δp past a plate fragment.
-/// Nor does it count once it has failed itself.
+/// Rubble is part of no body (`strike::mixing`): a particle of the upper plate b pushed
+/// 0.08 Δp past the lower plate a's surface layer counts as mixed while the particles of b
+/// around it are intact, and not once they have all failed: it is then a fragment amid b's
+/// rubble, as in the CN-SPH demo's debris cloud at 0.1 µs, where a sphere particle with 43
+/// failed neighbours and an intact colour of its own body of 0.22–0.30 (a fragment's) flew
+/// 0.04 Δp past a plate fragment. Nor does it count once it has failed itself.
 #[test]
 fn mixing_counts_no_rubble_as_a_body() {
-    let case = parse(
-        r#"
-[simulation]
-dimension = 2
-end_time = 1.0
-[materials.al]
-library = "al_6061_t6"
-damage = { type = "none" }
-[[body]]
-name = "a"
-material = "al"
-spacing = 1.0e-3
-shape = { type = "rectangle", min = [0.0, 0.01], max = [0.02, 0.02] }
-[[body]]
-name = "b"
-material = "al"
-spacing = 1.0e-3
-shape = { type = "rectangle", min = [0.0, 0.0], max = [0.02, 0.01] }
-"#,
-    );
-    let mixing = |fail_a: bool, fail_i: bool| {
+    let case = parse(FACE);
+    let mixing = |fail_b: bool, fail_i: bool| {
         let mut sim = Simulation::<2>::new(&case).unwrap();
         let p = &mut sim.particles;
-        // The particle of a's lowest layer at x = 10.5 mm, moved into a gap of b's top layer
+        let lowest =
+            |p: &strike::particles::Particles<2>, k: usize| p.body[k] == 1 && p.x[k][1] < 10.6e-3;
+        // The particle of b's lowest layer at x = 10.5 mm, moved into a gap of a's top layer
         // (y = 9.5 mm), 0.08 Δp past it.
         let i = (0..p.n_real)
-            .find(|&k| p.body[k] == 0 && (p.x[k][0] - 10.5e-3).abs() < 1e-6 && p.x[k][1] < 10.6e-3)
+            .find(|&k| lowest(p, k) && (p.x[k][0] - 10.5e-3).abs() < 1e-6)
             .unwrap();
-        // a's lowest layer half a spacing closer to b, so that i keeps its own body around it.
+        // b's lowest layer half a spacing closer to a, so that i keeps its own body around it.
         for k in 0..p.n_real {
-            if p.body[k] == 0 && p.x[k][1] < 10.6e-3 {
+            if lowest(p, k) {
                 p.x[k][1] -= 0.5e-3;
             }
         }
         p.x[i][0] = 10.0e-3;
         p.x[i][1] = 9.42e-3;
         for k in 0..p.n_real {
-            if p.body[k] == 0 && ((k != i && fail_a) || (k == i && fail_i)) {
+            if p.body[k] == 1 && ((k != i && fail_b) || (k == i && fail_i)) {
                 p.damage[k] = 1.0;
             }
         }
