@@ -297,6 +297,11 @@ pub fn cases() -> Vec<CaseDef> {
             run: taylor,
         },
         CaseDef {
+            name: "taylor_ofhc",
+            title: "Taylor tests, OFHC copper, Johnson–Cook, against Johnson & Cook's rods (VALIDATION.md §F)",
+            run: taylor_ofhc,
+        },
+        CaseDef {
             name: "taylor_walls",
             title: "Taylor bars (steel, copper) on a symmetry plane, a fixed wall and their twin (VALIDATION.md §F)",
             run: taylor_walls,
@@ -313,6 +318,7 @@ fn example(name: &str) -> Result<Case> {
         "spall" => include_str!("../examples/spall.toml"),
         "taylor_bar" => include_str!("../examples/taylor_bar.toml"),
         "taylor_copper" => include_str!("../examples/taylor_copper.toml"),
+        "taylor_ofhc" => include_str!("../examples/taylor_ofhc.toml"),
         "planar_impact_contact" => include_str!("../examples/planar_impact_contact.toml"),
         "planar_impact_welded" => include_str!("../examples/planar_impact_welded.toml"),
         "bars_contact" => include_str!("../examples/bars_contact.toml"),
@@ -987,6 +993,30 @@ pub fn spall(fine: bool) -> Result<Outcome> {
     Ok(Outcome { checks, figures })
 }
 
+/// With a coarser run's error in `previous`, a check that this finer run's `error` is no
+/// larger (refinement does not move away from the answer); then `previous` becomes `error`.
+fn converges(
+    checks: &mut Vec<Check>,
+    previous: &mut Option<f64>,
+    error: f64,
+    quantity: &str,
+    setting: &str,
+) {
+    if let Some(e) = *previous {
+        checks.push(
+            Check::new(
+                quantity,
+                setting,
+                error,
+                "",
+                "refinement does not move away from the answer",
+            )
+            .at_most(e),
+        );
+    }
+    *previous = Some(error);
+}
+
 /// A Taylor-bar run at 80 µs: (final length, impact-face diameter, peak plastic strain, the
 /// rod's profile (z, largest radius) in bins of one spacing), lengths in m. The length runs
 /// over the rod's particles from the lowest to the highest plus one spacing (each particle
@@ -1096,6 +1126,100 @@ pub fn taylor(fine: bool) -> Result<Outcome> {
                     ("initial radius".into(), vec![3.2; z.len()]),
                 ],
             )],
+        });
+    }
+    Ok(Outcome { checks, figures })
+}
+
+/// Johnson & Cook's (1983) cylinder-impact tests of OFHC copper (`examples/taylor_ofhc.toml`:
+/// L0 = 25.4 mm, D0 = 7.62 mm onto a hardened anvil, here the symmetry plane z = 0), with the
+/// library's `ofhc_copper` and its Johnson–Cook constants from the same paper, failure off (the
+/// recovered rods were whole). The tests as tabulated by Zerilli & Armstrong (1987, J. Appl.
+/// Phys. 61, 1816): at 190, 146 and 130 m/s, final length L_f/L0 = 0.638, 0.736, 0.770 and
+/// impact-face diameter D_f/D0 = 1.78, 1.40, 1.30 (B. Banerjee's compilation,
+/// github.com/bbanerjee/HighRateExptData; its digitised profiles of the same rods read faces
+/// 3.5–4 % narrower, the uncertainty of the face). The model was fitted to torsion and
+/// Hopkinson-bar data, not to these rods, so the check is a prediction: the final length
+/// within 12 % and the face within 10 % at the finest spacing, each converging. Coarse:
+/// 190 m/s at R0/Δp = 8 and 12 (about a minute and a half on 2 cores); `fine`: all three
+/// speeds at 8 and 16 (about ten minutes).
+pub fn taylor_ofhc(fine: bool) -> Result<Outcome> {
+    const L0: f64 = 25.4e-3;
+    const D0: f64 = 7.62e-3;
+    let source = "Johnson & Cook 1983 tests (Zerilli & Armstrong 1987)";
+    let tests: &[(f64, f64, f64)] = if fine {
+        &[
+            (190.0, 0.638, 1.78),
+            (146.0, 0.736, 1.40),
+            (130.0, 0.770, 1.30),
+        ]
+    } else {
+        &[(190.0, 0.638, 1.78)]
+    };
+    let ratios: &[f64] = if fine { &[8.0, 16.0] } else { &[8.0, 12.0] };
+    let finest = ratios[ratios.len() - 1];
+    let mut checks = Vec::new();
+    let mut figures = Vec::new();
+    for &(speed, length, face) in tests {
+        let (mut prev_l, mut prev_d) = (None, None);
+        let mut profiles = Vec::new();
+        for &ratio in ratios {
+            let mut case = example("taylor_ofhc")?;
+            case.bodies[0].spacing = 0.5 * D0 / ratio;
+            case.bodies[0].velocity = [0.0, 0.0, -speed];
+            let r = taylor_run(&case)?;
+            let s = format!("{speed} m/s, R0/Δp = {ratio}");
+            for (what, got, want, tol, previous) in [
+                ("final length", r.length, length * L0, 0.12, &mut prev_l),
+                ("impact-face diameter", r.face, face * D0, 0.10, &mut prev_d),
+            ] {
+                let c = Check::new(what, &s, got, "m", source);
+                checks.push(if ratio == finest {
+                    c.within(want, tol)
+                } else {
+                    c.reported(want)
+                });
+                // The length converges at every speed; the face at 190 m/s. At 146 and
+                // 130 m/s the face widens past the tests' with refinement (README, Not yet):
+                // reported, not held.
+                if what == "final length" || speed >= 190.0 {
+                    converges(
+                        &mut checks,
+                        previous,
+                        (got / want - 1.0).abs(),
+                        &format!("{what} error, finer against coarser"),
+                        &s,
+                    );
+                }
+            }
+            profiles.push((ratio, r.profile));
+        }
+        let z: Vec<f64> = profiles[0].1.iter().map(|r| r.0 * 1e3).collect();
+        let mut series: Vec<(String, Vec<f64>)> = profiles
+            .iter()
+            .map(|(ratio, prof)| {
+                // Each run's profile on the coarsest run's heights (its nearest bin).
+                let dz = prof.get(1).map_or(1.0, |b| b.0 - prof[0].0);
+                let radius = z
+                    .iter()
+                    .map(|&zz| {
+                        let k = ((zz * 1e-3 - prof[0].0) / dz).round().max(0.0) as usize;
+                        prof.get(k).map_or(0.0, |b| b.1 * 1e3)
+                    })
+                    .collect();
+                (format!("strike, R0/Δp = {ratio}"), radius)
+            })
+            .collect();
+        series.push((
+            "test face radius".into(),
+            vec![0.5 * face * D0 * 1e3; z.len()],
+        ));
+        series.push(("initial radius".into(), vec![0.5 * D0 * 1e3; z.len()]));
+        figures.push(Figure {
+            name: format!("profile_{speed}"),
+            x_label: "height above the anvil (mm)".into(),
+            x: z,
+            panels: vec![(format!("radius at 80 µs, {speed} m/s (mm)"), series)],
         });
     }
     Ok(Outcome { checks, figures })

@@ -116,6 +116,18 @@ fn taylor_bar_final_length_matches_the_finite_element_results() {
     validated(strike::validate::taylor(false));
 }
 
+/// Issue 13, item 6 (the copper Taylor test; `strike validate --case taylor_ofhc`): Johnson &
+/// Cook's OFHC copper rod (25.4 × 7.62 mm) at 190 m/s with the library's Johnson–Cook
+/// constants, against the recovered rod (L_f/L0 = 0.638, D_f/D0 = 1.78) at R0/Δp = 8 and 12:
+/// both figures converge toward the test (length +14.8 / +11.3 %, face −9.3 / −5.0 %), held
+/// within 12 % and 10 % at 12. The library's failure is off, as the rods were whole. With it
+/// on, the spall model breaks the rim of the face (README, Not yet) and the test fails: the
+/// rim's rubble spreads over the anvil, and the face reads 71 / 75 mm.
+#[test]
+fn ofhc_copper_taylor_rods_converge_to_johnson_and_cooks_tests() {
+    validated(strike::validate::taylor_ofhc(false));
+}
+
 /// Issue 13 (Steinberg–Guinan in a run, `strike validate --case shocked_strength`): behind a
 /// 14 GPa shock into Al 6061-T6 the particles flow at Steinberg–Guinan's stress of the shocked
 /// state, 0.600 GPa by the Rayleigh line (twice Y0), within 10 %, and the compression is the

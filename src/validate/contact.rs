@@ -8,7 +8,9 @@
 //! tests (`tests/verification_contact.rs`, `tests/contact_fidelity.rs`, `tests/sphere_plate.rs`)
 //! call these functions.
 
-use super::{example, formulation_label, front, profile, variant, Check, Figure, Outcome};
+use super::{
+    converges, example, formulation_label, front, profile, variant, Check, Figure, Outcome,
+};
 use crate::case::{Case, ContactLaw, Formulation, InteractionKind, Shape};
 use crate::error::{Error, Result};
 use crate::simulation::{Diagnostics, Simulation};
@@ -144,30 +146,6 @@ fn mixing(rows: &[Row]) -> (f64, u64) {
     rows.iter()
         .flat_map(|r| r.d.mixing.iter())
         .fold((0.0, 0), |(p, m), x| (p.max(x.penetration), m.max(x.mixed)))
-}
-
-/// With a coarser run's error in `previous`, a check that this finer run's `error` is no
-/// larger (refinement does not move away from the answer); then `previous` becomes `error`.
-fn converges(
-    checks: &mut Vec<Check>,
-    previous: &mut Option<f64>,
-    error: f64,
-    quantity: &str,
-    setting: &str,
-) {
-    if let Some(e) = *previous {
-        checks.push(
-            Check::new(
-                quantity,
-                setting,
-                error,
-                "",
-                "refinement does not move away from the answer",
-            )
-            .at_most(e),
-        );
-    }
-    *previous = Some(error);
 }
 
 /// The checks every contact run shares: momentum to round-off (where no external force acts
