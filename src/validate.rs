@@ -1131,13 +1131,19 @@ pub fn taylor(fine: bool) -> Result<Outcome> {
     Ok(Outcome { checks, figures })
 }
 
-/// The recovered copper rods' profiles, (height above the face, radius) in mm, at 190, 146 and
-/// 130 m/s: the 190 m/s rod digitised from Zerilli & Armstrong (1987, p. 1822), the others
-/// from Johnson & Cook (1983, p. 546), by B. Banerjee (github.com/bbanerjee/HighRateExptData,
+/// A rod's profile: (height, radius) pairs from its face up.
+type Profile = &'static [(f64, f64)];
+
+/// Johnson & Cook's copper rods: impact speed (m/s), L_f/L0 and D_f/D0 as tabulated by Zerilli
+/// & Armstrong (1987), and the recovered rod's profile, (height above the face, radius) in mm,
+/// the 190 m/s rod digitised from Zerilli & Armstrong (1987, p. 1822), the others from Johnson
+/// & Cook (1983, p. 546), by B. Banerjee (github.com/bbanerjee/HighRateExptData,
 /// TaylorData/DAT), rounded to 1 µm.
-const OFHC_PROFILES: [(f64, &[(f64, f64)]); 3] = [
+const OFHC_RODS: [(f64, f64, f64, Profile); 3] = [
     (
         190.0,
+        0.638,
+        1.78,
         &[
             (0.0, 6.842),
             (0.584, 6.408),
@@ -1159,6 +1165,8 @@ const OFHC_PROFILES: [(f64, &[(f64, f64)]); 3] = [
     ),
     (
         146.0,
+        0.736,
+        1.40,
         &[
             (0.0, 5.147),
             (2.055, 4.716),
@@ -1174,6 +1182,8 @@ const OFHC_PROFILES: [(f64, &[(f64, f64)]); 3] = [
     ),
     (
         130.0,
+        0.770,
+        1.30,
         &[
             (0.0, 4.765),
             (2.067, 4.593),
@@ -1190,7 +1200,7 @@ const OFHC_PROFILES: [(f64, &[(f64, f64)]); 3] = [
     ),
 ];
 
-/// A profile's radius at height z (mm), linear between its points; 0 above its top.
+/// A profile's radius at height z, linear between its points (its first below them, 0 above).
 fn profile_at(profile: &[(f64, f64)], z: f64) -> f64 {
     match profile.iter().position(|p| p.0 >= z) {
         Some(0) => profile[0].1,
@@ -1212,27 +1222,23 @@ fn profile_at(profile: &[(f64, f64)], z: f64) -> f64 {
 /// 3.5–4 % narrower, the uncertainty of the face). The model was fitted to torsion and
 /// Hopkinson-bar data, not to these rods, so the check is a prediction: the final length
 /// within 12 % and the face within 10 % at the finest spacing, each converging; the figures
-/// draw each run's profile over the recovered rod's (`OFHC_PROFILES`). Coarse:
+/// draw each run's profile over the recovered rod's (`OFHC_RODS`). Coarse:
 /// 190 m/s at R0/Δp = 8 and 12 (about a minute and a half on 2 cores); `fine`: all three
 /// speeds at 8 and 16 (about ten minutes).
 pub fn taylor_ofhc(fine: bool) -> Result<Outcome> {
     const L0: f64 = 25.4e-3;
     const D0: f64 = 7.62e-3;
     let source = "Johnson & Cook 1983 tests (Zerilli & Armstrong 1987)";
-    let tests: &[(f64, f64, f64)] = if fine {
-        &[
-            (190.0, 0.638, 1.78),
-            (146.0, 0.736, 1.40),
-            (130.0, 0.770, 1.30),
-        ]
+    let rods = if fine {
+        &OFHC_RODS[..]
     } else {
-        &[(190.0, 0.638, 1.78)]
+        &OFHC_RODS[..1]
     };
     let ratios: &[f64] = if fine { &[8.0, 16.0] } else { &[8.0, 12.0] };
     let finest = ratios[ratios.len() - 1];
     let mut checks = Vec::new();
     let mut figures = Vec::new();
-    for &(speed, length, face) in tests {
+    for &(speed, length, face, rod) in rods {
         let (mut prev_l, mut prev_d) = (None, None);
         let mut profiles = Vec::new();
         for &ratio in ratios {
@@ -1266,26 +1272,16 @@ pub fn taylor_ofhc(fine: bool) -> Result<Outcome> {
             }
             profiles.push((ratio, r.profile));
         }
+        // Every profile on the coarsest run's heights (mm).
         let z: Vec<f64> = profiles[0].1.iter().map(|r| r.0 * 1e3).collect();
         let mut series: Vec<(String, Vec<f64>)> = profiles
             .iter()
             .map(|(ratio, prof)| {
-                // Each run's profile on the coarsest run's heights (its nearest bin).
-                let dz = prof.get(1).map_or(1.0, |b| b.0 - prof[0].0);
-                let radius = z
-                    .iter()
-                    .map(|&zz| {
-                        let k = ((zz * 1e-3 - prof[0].0) / dz).round().max(0.0) as usize;
-                        prof.get(k).map_or(0.0, |b| b.1 * 1e3)
-                    })
-                    .collect();
+                let mm: Vec<(f64, f64)> = prof.iter().map(|b| (b.0 * 1e3, b.1 * 1e3)).collect();
+                let radius = z.iter().map(|&zz| profile_at(&mm, zz)).collect();
                 (format!("strike, R0/Δp = {ratio}"), radius)
             })
             .collect();
-        let rod = OFHC_PROFILES
-            .iter()
-            .find(|p| p.0 == speed)
-            .map_or(&[][..], |p| p.1);
         series.push((
             "recovered rod (digitised)".into(),
             z.iter().map(|&zz| profile_at(rod, zz)).collect(),
