@@ -109,7 +109,7 @@ enum Command {
         /// Only these cases (repeatable): kernel, consistency, contact_direction, elastic_wave,
         /// hel, energy, planar_impact, bars, slow_bars, striker, sliding, incline, rubber_rings,
         /// hertz, planar_7kms, sphere_plate, spall, shocked_strength, taylor,
-        /// taylor_walls.
+        /// taylor_ofhc, taylor_walls.
         #[arg(long = "case", value_name = "NAME")]
         cases: Vec<String>,
         /// Output directory (default: runs/validate).
