@@ -242,11 +242,14 @@ pub struct InteractionSpec {
     pub kind: InteractionKind,
 }
 
-/// A symmetry plane x_axis = position (mirrored ghost particles).
+/// A symmetry plane x_axis = position (mirrored ghost particles), or a frictionless rigid
+/// wall there (`wall`: the mirror images meet the bodies through the contact, see
+/// `boundary`).
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct SymmetryPlane {
     pub axis: usize,
     pub position: f64,
+    pub wall: bool,
 }
 
 /// `[output]`.
@@ -347,7 +350,18 @@ impl Case {
             let [a, b] = i.bodies.map(|k| self.bodies[k].name.as_str());
             out.push((format!("interaction {a}–{b}"), format!("{:?}", i.kind)));
         }
-        out.push(("symmetry".into(), format!("{:?}", self.symmetry)));
+        let planes = |wall: bool| -> Vec<String> {
+            self.symmetry
+                .iter()
+                .filter(|p| p.wall == wall)
+                .map(|p| format!("{} = {:?}", ["x", "y", "z"][p.axis], p.position))
+                .collect()
+        };
+        out.push(("symmetry".into(), format!("{:?}", planes(false))));
+        let walls = planes(true);
+        if !walls.is_empty() {
+            out.push(("walls".into(), format!("{walls:?}")));
+        }
         out
     }
 }

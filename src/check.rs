@@ -319,7 +319,12 @@ fn check_dim<const D: usize>(case: &Case) -> Result<String> {
         let touching = (0..n).any(|i| pl.depth(p.x[i][pl.axis]) < 2.0 * p.h[i]);
         if !touching {
             warnings.push(format!(
-                "symmetry plane {}={} touches no body: it has no effect",
+                "{} {}={} touches no body: it has no effect",
+                if pl.wall.is_some() {
+                    "wall"
+                } else {
+                    "symmetry plane"
+                },
                 ["x", "y", "z"][pl.axis],
                 pl.position
             ));

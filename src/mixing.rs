@@ -132,8 +132,9 @@ fn particle<const D: usize, K: Kernel>(
         let r = xij.norm();
         let hij = 0.5 * (p.h[i] + p.h[j]);
         let vol = p.m[j] / p.rho[j];
-        // Rubble is part of no body: neither the other's nor i's own.
-        if p.damage[j] >= 1.0 {
+        // Rubble is part of no body: neither the other's nor i's own. A wall's image of a
+        // body (body ≥ the bodies, see `boundary`) is no body to mix with.
+        if p.damage[j] >= 1.0 || p.body[j] as usize >= spacing.len() {
             continue;
         }
         if p.body[j] == bi {

@@ -433,19 +433,21 @@ fn time_tolerance(case: &Case) -> f64 {
 
 /// What `summary.json` says about the part of the bodies a run models.
 pub fn modelled_part(case: &Case) -> String {
-    if case.symmetry.is_empty() {
-        return "the whole bodies: masses, forces, momenta and energies are those of the bodies"
-            .into();
-    }
+    // A wall cuts nothing off: the bodies on its side are whole.
     let planes: Vec<String> = case
         .symmetry
         .iter()
+        .filter(|p| !p.wall)
         .map(|p| format!("{} = {}", ["x", "y", "z"][p.axis], p.position))
         .collect();
+    if planes.is_empty() {
+        return "the whole bodies: masses, forces, momenta and energies are those of the bodies"
+            .into();
+    }
     format!(
         "the part on one side of the symmetry planes {}: masses, forces, momenta and energies are those of the part modelled (for bodies cut in two by each plane, ×{} for the whole)",
         planes.join(", "),
-        1u64 << case.symmetry.len().min(63)
+        1u64 << planes.len().min(63)
     )
 }
 

@@ -333,6 +333,14 @@ fn out_of_range_values() {
         "symmetry[0].axis",
         28,
     );
+    // A wall where a symmetry plane already is.
+    let (message, help) = deck_error(
+        &format!("{GOOD}\n[[symmetry]]\naxis = \"x\"\n\n[[wall]]\naxis = \"x\"\n"),
+        "wall[0].axis",
+        31,
+    );
+    assert!(message.contains("twice"), "{message}");
+    assert!(help.contains("[[symmetry]]"), "{help}");
 }
 
 #[test]

@@ -115,6 +115,7 @@ fn every_deck_key_is_documented() {
         "[[body]]",
         "[[interaction]]",
         "[[symmetry]]",
+        "[[wall]]",
         "[output]",
         "[[output.picture]]",
     ] {

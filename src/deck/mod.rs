@@ -26,6 +26,9 @@ use crate::error::{DeckLocation, Error, Result};
 pub use library::{library_material, library_names};
 use raw::S;
 
+/// A `[[symmetry]]` or `[[wall]]` table as read.
+type Plane = raw::Located<raw::Symmetry>;
+
 /// Reads and validates the deck at `path`.
 pub fn load(path: &Path) -> Result<Case> {
     let text = std::fs::read_to_string(path).map_err(|e| Error::io(path, e))?;
@@ -703,7 +706,8 @@ impl Ctx<'_> {
         self.check_memory(raw_bodies, &bodies, (dimension, corrected), memory)?;
 
         let interactions = self.interactions(deck.interaction.as_deref(), &bodies)?;
-        let symmetry = self.symmetry(deck.symmetry.as_deref(), dimension)?;
+        let symmetry =
+            self.symmetry((deck.symmetry.as_deref(), deck.wall.as_deref()), dimension)?;
         let output = self.output(deck.output.as_ref(), simulation.end_time)?;
 
         Ok(Case {
@@ -1396,53 +1400,64 @@ impl Ctx<'_> {
         Ok(out)
     }
 
+    /// The `[[symmetry]]` planes, then the `[[wall]]` ones (a frictionless rigid wall: the
+    /// same mirror, met through the contact).
     fn symmetry(
         &self,
-        raw: Option<&[raw::Located<raw::Symmetry>]>,
+        (planes, walls): (Option<&[Plane]>, Option<&[Plane]>),
         dim: usize,
     ) -> Result<Vec<SymmetryPlane>> {
         let mut out: Vec<SymmetryPlane> = Vec::new();
-        for (i, sy) in raw.unwrap_or(&[]).iter().enumerate() {
-            let prefix = format!("symmetry[{i}]");
-            let r = sy.get_ref();
-            let Some(axis) = &r.axis else {
-                return Err(self.missing(
-                    &sy.anchor(),
-                    &format!("{prefix}.axis"),
-                    "the normal axis of the symmetry plane",
-                    "add e.g. `axis = \"x\"`",
-                ));
-            };
-            if dim == 2 && axis.get_ref() == "z" {
-                return Err(self.fail(
-                    axis.span(),
-                    format!("{prefix}.axis"),
-                    "a symmetry plane normal to z in a 2D deck",
-                    "in 2D (plane strain) the symmetry axis is `x` or `y`",
-                ));
+        let tables = [(planes, "symmetry", false), (walls, "wall", true)];
+        for (raw, table, wall) in tables {
+            let what = if wall { "wall" } else { "symmetry plane" };
+            for (i, sy) in raw.unwrap_or(&[]).iter().enumerate() {
+                let prefix = format!("{table}[{i}]");
+                let r = sy.get_ref();
+                let Some(axis) = &r.axis else {
+                    return Err(self.missing(
+                        &sy.anchor(),
+                        &format!("{prefix}.axis"),
+                        &format!("the normal axis of the {what}"),
+                        "add e.g. `axis = \"x\"`",
+                    ));
+                };
+                if dim == 2 && axis.get_ref() == "z" {
+                    return Err(self.fail(
+                        axis.span(),
+                        format!("{prefix}.axis"),
+                        format!("a {what} normal to z in a 2D deck"),
+                        format!("in 2D (plane strain) the {what}'s axis is `x` or `y`"),
+                    ));
+                }
+                let name = self.choice(axis, &format!("{prefix}.axis"), &AXES[..dim], "axis")?;
+                let axis_index = AXES.iter().position(|a| *a == name).unwrap_or(0);
+                let position = match &r.position {
+                    Some(p) => self.finite(p, &format!("{prefix}.position"))?,
+                    None => 0.0,
+                };
+                if let Some(twice) = out
+                    .iter()
+                    .find(|p| p.axis == axis_index && p.position == position)
+                {
+                    let first = if twice.wall {
+                        "[[wall]]"
+                    } else {
+                        "[[symmetry]]"
+                    };
+                    return Err(self.fail(
+                        axis.span(),
+                        format!("{prefix}.axis"),
+                        format!("the plane {name} = {} is given twice", num(position)),
+                        format!("remove this [[{table}]] table or the {first} one"),
+                    ));
+                }
+                out.push(SymmetryPlane {
+                    axis: axis_index,
+                    position,
+                    wall,
+                });
             }
-            let name = self.choice(axis, &format!("{prefix}.axis"), &AXES[..dim], "axis")?;
-            let axis_index = AXES.iter().position(|a| *a == name).unwrap_or(0);
-            let position = match &r.position {
-                Some(p) => self.finite(p, &format!("{prefix}.position"))?,
-                None => 0.0,
-            };
-            let plane = SymmetryPlane {
-                axis: axis_index,
-                position,
-            };
-            if out.contains(&plane) {
-                return Err(self.fail(
-                    axis.span(),
-                    format!("{prefix}.axis"),
-                    format!(
-                        "the symmetry plane {name} = {} is given twice",
-                        num(position)
-                    ),
-                    "remove the duplicate [[symmetry]] table",
-                ));
-            }
-            out.push(plane);
         }
         Ok(out)
     }

@@ -148,6 +148,7 @@ pub struct Deck {
     pub body: Option<Vec<Located<Body>>>,
     pub interaction: Option<Vec<Located<Interaction>>>,
     pub symmetry: Option<Vec<Located<Symmetry>>>,
+    pub wall: Option<Vec<Located<Symmetry>>>,
     pub output: Option<Located<Output>>,
 }
 

@@ -230,11 +230,13 @@ fn full_3d_deck() {
         [
             SymmetryPlane {
                 axis: 0,
-                position: 0.0
+                position: 0.0,
+                wall: false
             },
             SymmetryPlane {
                 axis: 1,
-                position: 0.0
+                position: 0.0,
+                wall: false
             }
         ]
     );
@@ -444,7 +446,8 @@ fn full_2d_deck() {
         case.symmetry,
         [SymmetryPlane {
             axis: 1,
-            position: -0.2
+            position: -0.2,
+            wall: false
         }]
     );
     assert_eq!(case.output.snapshot_interval, None);

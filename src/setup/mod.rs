@@ -91,14 +91,25 @@ pub fn build<const D: usize>(case: &Case) -> Result<(Particles<D>, Model<D>)> {
     }
     check_overlap(case, &p)?;
 
-    let body_material = case.bodies.iter().map(|b| b.material).collect();
-    let body_prescribed = case
-        .bodies
-        .iter()
+    // With a wall, body N + b is b's mirror image (see `boundary`): b's material; it is never
+    // integrated, and meets every body through the contact.
+    let n = case.bodies.len();
+    let images = if case.symmetry.iter().any(|s| s.wall) {
+        2
+    } else {
+        1
+    };
+    let body_material = (0..images * n)
+        .map(|b| case.bodies[b % n].material)
+        .collect();
+    let body_prescribed = (0..images * n)
+        .map(|b| &case.bodies[b % n])
         .map(|b| (b.motion == Motion::Prescribed).then(|| from3::<D>(b.velocity)))
         .collect();
-    let pairs = PairTable::new(case.bodies.len(), |a, b| {
-        pair_rule::<D>(case, &materials, a, b)
+    let pairs = PairTable::new(images * n, |a, b| match (a < n, b < n) {
+        (true, true) => pair_rule::<D>(case, &materials, a, b),
+        (true, false) => wall_rule(case, a, b - n),
+        _ => PairRule::Conserve,
     });
     let s = &case.simulation;
     let model = Model {
@@ -157,9 +168,21 @@ pub fn symmetry_planes(case: &Case) -> Vec<Plane> {
                 axis: s.axis,
                 position: s.position,
                 side,
+                wall: s.wall.then_some(case.bodies.len() as u32),
             }
         })
         .collect()
+}
+
+/// The rule between body a and the wall's image of body b: the colour law's contact, whatever
+/// the deck says of a and b (the wall is not b).
+fn wall_rule(case: &Case, a: usize, b: usize) -> PairRule {
+    PairRule::Contact(ContactParams {
+        law: ContactLaw::Colour,
+        stiffness: 0.0,
+        exponent: 0.0,
+        spacing: 0.5 * (case.bodies[a].spacing + case.bodies[b].spacing),
+    })
 }
 
 /// The rule between bodies a and b: the deck's, or contact with default settings.

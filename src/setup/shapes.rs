@@ -212,11 +212,13 @@ mod tests {
                 axis: 0,
                 position: 0.0,
                 side: 1.0,
+                wall: None,
             },
             Plane {
                 axis: 1,
                 position: 0.0,
                 side: 1.0,
+                wall: None,
             },
         ];
         let q = lattice::<3>(&s, 0.05, &planes);
