@@ -287,6 +287,8 @@ fn check_dim<const D: usize>(case: &Case) -> Result<String> {
                     PairRule::Conserve => {
                         let _ = writeln!(w, "  {na} – {nbn}: welded (conventional SPH)");
                     }
+                    // Only between a body and a wall's image (never two real bodies).
+                    PairRule::Wall => {}
                     PairRule::Contact(c) => {
                         let explicit = case.interactions.iter().any(|i| {
                             (i.bodies == [a, b] || i.bodies == [b, a])

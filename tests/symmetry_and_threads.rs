@@ -126,12 +126,10 @@ fn one_and_two_threads(case: &Case) {
     );
 }
 
-/// The mean velocity of body 0's particles along x (2D) or z (3D) after each step, and their
-/// end positions.
-fn body0<const D: usize>(case: &Case) -> (Vec<f64>, Vec<[f64; D]>) {
-    let mut sim = Simulation::<D>::new(case).unwrap();
+/// The mean x-velocity of body 0's particles after each step (and the step's end time).
+fn body0_velocity(case: &Case) -> Vec<(f64, f64)> {
+    let mut sim = Simulation::<2>::new(case).unwrap();
     let mut v = Vec::new();
-    let axis = if D == 2 { 0 } else { 2 };
     let end = case.simulation.end_time;
     while sim.state.time < end * (1.0 - 1e-12) {
         sim.step(end - sim.state.time).unwrap();
@@ -139,44 +137,26 @@ fn body0<const D: usize>(case: &Case) -> (Vec<f64>, Vec<[f64; D]>) {
         let (mut m, mut mv) = (0.0, 0.0);
         for i in (0..p.n_real).filter(|&i| p.body[i] == 0) {
             m += p.m[i];
-            mv += p.m[i] * p.v[i][axis];
+            mv += p.m[i] * p.v[i][0];
         }
-        v.push(mv / m);
+        v.push((sim.state.time, mv / m));
     }
-    // In the order of the particles' ids (the runs may reorder them differently).
-    let p = &sim.particles;
-    let mut own: Vec<usize> = (0..p.n_real).filter(|&i| p.body[i] == 0).collect();
-    own.sort_by_key(|&i| p.id[i]);
-    let x = own
-        .iter()
-        .map(|&i| std::array::from_fn(|k| p.x[i][k]))
-        .collect();
-    (v, x)
+    v
 }
 
-/// Largest difference between two runs' positions, in spacings.
-fn apart<const D: usize>(a: &[[f64; D]], b: &[[f64; D]], dp: f64) -> f64 {
-    assert_eq!(a.len(), b.len());
-    a.iter()
-        .zip(b)
-        .flat_map(|(p, q)| (0..D).map(move |k| (p[k] - q[k]).abs()))
-        .fold(0.0, f64::max)
-        / dp
-}
-
-/// A `[[wall]]` is the body meeting its mirror twin through the contact (a frictionless rigid
-/// wall), to round-off; a symmetry plane in its place holds the body. The elastic bars of
+/// A `[[wall]]` is a symmetry plane that only pushes. The elastic bars of
 /// `examples/bars_contact.toml` (±10 m/s, L/Δp = 100): the left bar alone on a wall at the
-/// interface follows its twin's run step by step and leaves at the twin's −9.60 m/s (acoustic:
-/// −10 m/s; `tests/contact_fidelity.rs` holds the bars to that); on a symmetry plane it is still
-/// held at the end and swings back past +5 m/s. Both formulations.
+/// interface follows the same bar on a symmetry plane step by step, to the bit, while it
+/// presses on the wall (to 15 µs; the wave's round trip 2L/c is 16.3 µs), and then leaves it
+/// at −9.57 m/s (CN-SPH −9.47; acoustic −10 m/s, the bars through the contact −9.60 / −9.47). On
+/// the symmetry plane it is still held at the end and swings back past +5 m/s. Both
+/// formulations.
 #[test]
-fn a_wall_is_the_twin_through_the_contact_and_a_symmetry_plane_holds_on() {
+fn a_wall_is_a_symmetry_plane_that_lets_go() {
     let path = Path::new(env!("CARGO_MANIFEST_DIR")).join("examples/bars_contact.toml");
     for f in [Formulation::Conventional, Formulation::Corrected] {
-        let mut twin = deck::load(&path).unwrap();
-        twin.simulation.formulation = f;
-        let mut wall = twin.clone();
+        let mut wall = deck::load(&path).unwrap();
+        wall.simulation.formulation = f;
         wall.bodies.truncate(1);
         wall.interactions.clear();
         wall.symmetry.push(strike::case::SymmetryPlane {
@@ -186,20 +166,16 @@ fn a_wall_is_the_twin_through_the_contact_and_a_symmetry_plane_holds_on() {
         });
         let mut plane = wall.clone();
         plane.symmetry.last_mut().unwrap().wall = false;
-        let dp = twin.bodies[0].spacing;
-        let (vt, xt) = body0::<2>(&twin);
-        let (vw, xw) = body0::<2>(&wall);
-        let (vp, _) = body0::<2>(&plane);
-        assert_eq!(vt.len(), vw.len(), "{f:?}: the wall takes other steps");
-        let dv = vt
-            .iter()
-            .zip(&vw)
-            .map(|(a, b)| (a - b).abs())
-            .fold(0.0, f64::max);
-        let dx = apart(&xt, &xw, dp);
-        let (end_t, end_w, end_p) = (vt[vt.len() - 1], vw[vw.len() - 1], vp[vp.len() - 1]);
-        eprintln!("{f:?}: twin {end_t:.4} m/s, wall {end_w:.4}, plane {end_p:.4}; |Δv| {dv:.2e} m/s, |Δx| {dx:.2e} Δp");
-        assert!(dv < 1e-9 && dx < 1e-9, "{f:?}: the wall is not the twin");
+        let (w, p) = (body0_velocity(&wall), body0_velocity(&plane));
+        let pressed = w.iter().take_while(|r| r.0 < 15e-6).count();
+        assert!(pressed > 100);
+        assert_eq!(
+            w[..pressed],
+            p[..pressed],
+            "{f:?}: the wall is not the plane while pressed"
+        );
+        let (end_w, end_p) = (w[w.len() - 1].1, p[p.len() - 1].1);
+        eprintln!("{f:?}: {pressed} steps as the plane; the bar leaves the wall at {end_w:.4} m/s, the plane's swings to {end_p:.4}");
         assert!(end_w < -9.0, "{f:?}: left the wall at {end_w} m/s");
         assert!(
             end_p > 5.0,
@@ -208,38 +184,51 @@ fn a_wall_is_the_twin_through_the_contact_and_a_symmetry_plane_holds_on() {
     }
 }
 
-/// The same in 3D with symmetry planes beside the wall: a quarter copper rod
-/// (`examples/taylor_ofhc.toml`, L0/Δp = 27, R0/Δp ≈ 4) on a wall against the quarter rod and
-/// its twin, for 3 µs (the mirror bodies of the corner ghosts, a wall's ghosts mirrored in the
-/// symmetry planes, included). A whole number of spacings along the rod, so that the twin's
-/// lattice, laid from its far end, is the rod's mirror image.
+/// A wall beside symmetry planes (the mirror images of the corner ghosts included): a quarter
+/// copper rod (`examples/taylor_ofhc.toml`, R0/Δp = 4, 190 m/s) on a wall with the symmetry
+/// planes x = 0 and y = 0 against the whole rod on the wall, for 3 µs, in which the face lifts
+/// off the wall in part (the radial release meets on the axis): the same particles to
+/// round-off, as `quarter_model_matches_full_model` holds for symmetry planes alone.
 #[test]
-fn a_wall_beside_symmetry_planes_is_the_twin() {
+fn a_wall_beside_symmetry_planes_matches_the_whole_model() {
     let path = Path::new(env!("CARGO_MANIFEST_DIR")).join("examples/taylor_ofhc.toml");
-    let mut wall = deck::load(&path).unwrap();
-    wall.bodies[0].spacing = 25.4e-3 / 27.0;
-    wall.simulation.end_time = 3e-6;
-    let mut twin = wall.clone();
-    for s in &mut wall.symmetry {
+    let mut quarter = deck::load(&path).unwrap();
+    quarter.bodies[0].spacing = 3.81e-3 / 4.0;
+    quarter.simulation.end_time = 3e-6;
+    for s in &mut quarter.symmetry {
         s.wall = s.axis == 2;
     }
-    twin.symmetry.retain(|s| s.axis != 2);
-    let mut other = twin.bodies[0].clone();
-    other.name = "twin".into();
-    other.velocity[2] = -other.velocity[2];
-    if let strike::case::Shape::Cylinder { base, length, .. } = &mut other.shape {
-        base[2] = -*length;
+    let mut whole = quarter.clone();
+    whole.symmetry.retain(|s| s.wall);
+    let q0 = Simulation::<3>::new(&quarter).unwrap().particles.x;
+    let f0 = Simulation::<3>::new(&whole).unwrap().particles.x;
+    let (q, qh) = run(&quarter);
+    let (f, fh) = run(&whole);
+    assert_eq!(f.particles.n_real, 4 * q.particles.n_real);
+    let key = |x: &nalgebra::SVector<f64, 3>| [0, 1, 2].map(|k| (x[k] / 1e-9).round() as i64);
+    let full_index: HashMap<[i64; 3], usize> =
+        f0.iter().enumerate().map(|(i, x)| (key(x), i)).collect();
+    let dp = quarter.bodies[0].spacing;
+    let where_id: HashMap<u32, usize> = (0..f.particles.n_real)
+        .map(|j| (f.particles.id[j], j))
+        .collect();
+    let mut worst: f64 = 0.0;
+    for i in 0..q.particles.n_real {
+        let j0 = full_index[&key(&q0[q.particles.id[i] as usize])];
+        let j = where_id[&(j0 as u32)];
+        worst = worst.max((q.particles.x[i] - f.particles.x[j]).norm() / dp);
     }
-    twin.bodies.push(other);
-    let (vt, xt) = body0::<3>(&twin);
-    let (vw, xw) = body0::<3>(&wall);
-    let dx = apart(&xt, &xw, wall.bodies[0].spacing);
+    let lifted = (0..f.particles.n_real)
+        .filter(|&j| f0[f.particles.id[j] as usize][2] < dp && f.particles.x[j][2] > 0.6 * dp)
+        .count();
     eprintln!(
-        "rod: twin {:.3} m/s, wall {:.3} m/s, |Δx| {dx:.2e} Δp",
-        vt[vt.len() - 1],
-        vw[vw.len() - 1]
+        "quarter rod on a wall vs the whole: {} steps, worst position difference {worst:.3e} Δp, {lifted} face particles over 0.6 Δp off the wall",
+        qh.len()
     );
-    assert_eq!(vt.len(), vw.len());
-    assert!(dx < 1e-9, "{dx}");
-    assert!(vw[vw.len() - 1] > -180.0, "the rod did not meet the wall");
+    assert_eq!(qh.len(), fh.len(), "same time steps");
+    assert!(worst < 1e-6, "positions differ by {worst} Δp");
+    assert!(
+        lifted > 0,
+        "nothing lifted off: the test does not see the release"
+    );
 }

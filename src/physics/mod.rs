@@ -11,8 +11,9 @@
 //!   conserved by the spatial discretisation (DESIGN.md §2 allows it in place of σ:D/ρ);
 //!   plus the lagged correction −½ Σ m_j (u_i − u_j)·(T_ij ∇_i W_ij) (see `integrate`).
 //!
-//! N_i are neighbours of the same body or of a `welded` body; C_i, neighbours of a body in
-//! `contact`, enter only through [`crate::contact`] (the paper's W = 0 across bodies).
+//! N_i are neighbours of the same body or of a `welded` body, and a wall's images of these
+//! while pressed against them ([`PairRule::Wall`], see `boundary`); C_i, neighbours of a body
+//! in `contact`, enter only through [`crate::contact`] (the paper's W = 0 across bodies).
 //!
 //! **CN-SPH** (`formulation = "corrected"`): with the corrections B_i of [`correction`], i's
 //! continuity and velocity gradient use ∇̃_i W_ij = B_i ∇_i W_ij (so a linear velocity field
@@ -68,6 +69,10 @@ pub enum PairRule {
     Conserve,
     /// Through the contact force only.
     Contact(ContactParams),
+    /// A body and a wall's image of itself or of a body welded to it (`boundary`): through the
+    /// conservation equations while the pair is pressed together, not at all while it pulls
+    /// apart.
+    Wall,
 }
 
 /// The rule for every ordered pair of bodies (symmetric).
@@ -205,7 +210,10 @@ pub fn corrections<const D: usize, K: Kernel>(
     owned: &Range<usize>,
     out: &mut Vec<correction::Correction<D>>,
 ) -> usize {
-    let joined = |a: u32, b: u32| a == b || matches!(model.pairs.rule(a, b), PairRule::Conserve);
+    // A wall's images count as the body's own, as a symmetry plane's ghosts do.
+    let joined = |a: u32, b: u32| {
+        a == b || matches!(model.pairs.rule(a, b), PairRule::Conserve | PairRule::Wall)
+    };
     correction::corrections(kernel, p, nl, joined, owned, out)
 }
 
@@ -689,7 +697,12 @@ fn particle_rates<const D: usize, K: Kernel, const ART: bool, const CN: bool>(
         let inside = r2 < support * support && r2 > 0.0;
         if gj.body != bi {
             let rule = model.pairs.rule(bi, gj.body);
-            if inside {
+            if let PairRule::Wall = rule {
+                // A wall's image: a neighbour of the same body while pressed (see `pressed`).
+                if !(inside && pressed(gi, gj, &xij)) {
+                    continue;
+                }
+            } else if inside {
                 gap = gap.min(r2.sqrt() / (0.5 * (gi.dp + gj.dp)));
             }
             if let PairRule::Contact(params) = rule {
@@ -1046,6 +1059,23 @@ fn beside_failed<const D: usize>(i: usize, neighbors: &[u32], pass: &Pass<D>) ->
         let gk = &pass.gather[k as usize];
         gk.failed && joined(pass.model, gi.body, gk.body) && within_support(gi, gk)
     })
+}
+
+/// Whether a particle and a wall's image of a particle are pressed together: the pair closes
+/// (v_ij·x_ij < 0), or its stress along the line between them, x̂_ij·(σ_i + σ_j)·x̂_ij, is
+/// compressive. The same answer from either side, and for the mirrored pair (j, image of i).
+#[inline]
+fn pressed<const D: usize>(gi: &Gather<D>, gj: &Gather<D>, xij: &[f64; D]) -> bool {
+    let mut closing = 0.0;
+    let mut normal = 0.0;
+    for a in 0..D {
+        closing += (gi.v[a] - gj.v[a]) * xij[a];
+        for b in 0..D {
+            let k = sym(a, b);
+            normal += xij[a] * (gi.sr2[k] * gi.rho * gi.rho + gj.sr2[k] * gj.rho * gj.rho) * xij[b];
+        }
+    }
+    closing < 0.0 || normal < 0.0
 }
 
 /// Whether bodies a and b meet through the conservation equations (the same body, or welded).

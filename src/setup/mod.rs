@@ -108,7 +108,7 @@ pub fn build<const D: usize>(case: &Case) -> Result<(Particles<D>, Model<D>)> {
         .collect();
     let pairs = PairTable::new(images * n, |a, b| match (a < n, b < n) {
         (true, true) => pair_rule::<D>(case, &materials, a, b),
-        (true, false) => wall_rule(case, a, b - n),
+        (true, false) => wall_rule::<D>(case, &materials, a, b - n),
         _ => PairRule::Conserve,
     });
     let s = &case.simulation;
@@ -174,15 +174,15 @@ pub fn symmetry_planes(case: &Case) -> Vec<Plane> {
         .collect()
 }
 
-/// The rule between body a and the wall's image of body b: the colour law's contact, whatever
-/// the deck says of a and b (the wall is not b).
-fn wall_rule(case: &Case, a: usize, b: usize) -> PairRule {
-    PairRule::Contact(ContactParams {
-        law: ContactLaw::Colour,
-        stiffness: 0.0,
-        exponent: 0.0,
-        spacing: 0.5 * (case.bodies[a].spacing + case.bodies[b].spacing),
-    })
+/// The rule between body a and the wall's image of body b: [`PairRule::Wall`] for a's own
+/// image and the images of bodies welded to a, and otherwise the rule of a and b (their
+/// contact meets the wall's side as it meets b).
+fn wall_rule<const D: usize>(case: &Case, materials: &[Material], a: usize, b: usize) -> PairRule {
+    match pair_rule::<D>(case, materials, a, b) {
+        _ if a == b => PairRule::Wall,
+        PairRule::Conserve => PairRule::Wall,
+        rule => rule,
+    }
 }
 
 /// The rule between bodies a and b: the deck's, or contact with default settings.
