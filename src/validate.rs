@@ -303,7 +303,7 @@ pub fn cases() -> Vec<CaseDef> {
         },
         CaseDef {
             name: "taylor_walls",
-            title: "Taylor bars (steel, copper) on a symmetry plane, a fixed wall and their twin (VALIDATION.md §F)",
+            title: "Taylor bars (steel, copper) on a wall, a symmetry plane, a fixed wall and their twin (VALIDATION.md §F)",
             run: taylor_walls,
         },
     ]
@@ -1069,7 +1069,7 @@ pub struct TaylorRun {
 }
 
 /// The Taylor bar (`examples/taylor_bar.toml`): 42CrMo4 at 287 m/s onto a frictionless rigid
-/// wall (the symmetry plane), quarter model, against the published finite-element results
+/// wall (`[[wall]]`), quarter model, against the published finite-element results
 /// (DynELA and Abaqus): final length 26.52–26.56 mm within 2 %, impact-face diameter
 /// 11.15–11.22 mm within 10 % at R0/Δp = 8 (the face converges from below) and 5 % at 16
 /// (`fine`).
@@ -1213,7 +1213,7 @@ fn profile_at(profile: &[(f64, f64)], z: f64) -> f64 {
 }
 
 /// Johnson & Cook's (1983) cylinder-impact tests of OFHC copper (`examples/taylor_ofhc.toml`:
-/// L0 = 25.4 mm, D0 = 7.62 mm onto a hardened anvil, here the symmetry plane z = 0), with the
+/// L0 = 25.4 mm, D0 = 7.62 mm onto a hardened anvil, here the wall z = 0), with the
 /// library's `ofhc_copper` and its Johnson–Cook constants from the same paper, failure off (the
 /// recovered rods were whole). The tests as tabulated by Zerilli & Armstrong (1987, J. Appl.
 /// Phys. 61, 1816): at 190, 146 and 130 m/s, final length L_f/L0 = 0.638, 0.736, 0.770 and
@@ -1301,13 +1301,20 @@ pub fn taylor_ofhc(fine: bool) -> Result<Outcome> {
     Ok(Outcome { checks, figures })
 }
 
-/// The Taylor bar of `deck` at `spacing` on a wall made three ways: a symmetry plane (the
-/// deck), the rod meeting its mirror twin through the contact, and a fixed steel body four
-/// spacings thick through the contact.
+/// The Taylor bar of `deck` at `spacing` on its wall (the deck's `[[wall]]` z = 0) and on the
+/// same wall made three more ways: a symmetry plane, the rod meeting its mirror twin through
+/// the contact, and a fixed steel body four spacings thick through the contact.
 pub fn taylor_variants(deck: &str, spacing: f64) -> Result<Vec<(&'static str, Case)>> {
-    let mut sym = example(deck)?;
-    sym.bodies[0].spacing = spacing;
-    let mut twin = sym.clone();
+    let mut wall = example(deck)?;
+    wall.bodies[0].spacing = spacing;
+    if !wall.symmetry.iter().any(|s| s.wall && s.axis == 2) {
+        return Err(Error::Invalid(format!("{deck}: no wall z = 0")));
+    }
+    let mut sym = wall.clone();
+    for s in &mut sym.symmetry {
+        s.wall = false;
+    }
+    let mut twin = wall.clone();
     twin.symmetry.retain(|s| s.axis != 2);
     let mut other = twin.bodies[0].clone();
     other.name = "twin".into();
@@ -1317,8 +1324,8 @@ pub fn taylor_variants(deck: &str, spacing: f64) -> Result<Vec<(&'static str, Ca
         _ => return Err(Error::Invalid(format!("{deck}: the rod is not a cylinder"))),
     }
     twin.bodies.push(other);
-    let mut wall = twin.clone();
-    wall.bodies[1] = crate::case::BodySpec {
+    let mut fixed = twin.clone();
+    fixed.bodies[1] = crate::case::BodySpec {
         name: "wall".into(),
         velocity: [0.0; 3],
         motion: crate::case::Motion::Prescribed,
@@ -1329,9 +1336,10 @@ pub fn taylor_variants(deck: &str, spacing: f64) -> Result<Vec<(&'static str, Ca
         ..twin.bodies[1].clone()
     };
     Ok(vec![
+        ("wall", wall),
         ("symmetry plane", sym),
         ("twin", twin),
-        ("fixed wall", wall),
+        ("fixed wall", fixed),
     ])
 }
 
@@ -1339,13 +1347,15 @@ pub fn taylor_variants(deck: &str, spacing: f64) -> Result<Vec<(&'static str, Ca
 /// (`examples/taylor_bar.toml`) and the copper one with linear hardening
 /// (`examples/taylor_copper.toml`, 227 m/s; the benchmark of Kamoulakos 1990, Zhu & Cescotto
 /// 1995, Camacho & Ortiz 1997: final length 21.42–21.47 mm, mushroom diameter 14.0–14.4 mm),
-/// each on a symmetry plane, against its twin through the contact and on a fixed wall through
-/// the contact, at R0/Δp = 8 (and 16): the three agree within 2 % in final length and face
-/// diameter. The copper bar against the published results: length within 4 % and face within
-/// 5 % at R0/Δp = 16, reported at 8 (it converges from there: +6.8 % and −13 %). About 5
-/// minutes at R0/Δp = 8 and over an hour more with `fine` on 2 cores. It fails today: the
-/// copper twin's and fixed wall's faces are −5.9 and −4.4 % of the symmetry plane's at
-/// R0/Δp = 8, the steel twin's +3.2 % at 16 (README, Not yet).
+/// each on its `[[wall]]`, against its twin through the contact and on a fixed wall through
+/// the contact, at R0/Δp = 8 (and 16): the three walls agree within 2 % in final length and
+/// face diameter. On a symmetry plane instead, reported beside them: a symmetry plane is a wall
+/// that also pulls, and it holds the face in tension where the radial release meets on the
+/// axis (`boundary`), so it is the same problem only while the face is pressed. The copper bar
+/// against the published results: length within 4 % and face within 5 % at R0/Δp = 16,
+/// reported at 8. About 6 minutes at R0/Δp = 8 and over an hour more with `fine` on 2 cores.
+/// It fails today: through the contact (twin, fixed wall) the faces are narrower than on the
+/// wall, by the contact's own error at a face (README, Not yet).
 pub fn taylor_walls(fine: bool) -> Result<Outcome> {
     let (length, face) = (21.445e-3, 14.2e-3);
     let source = "Kamoulakos 1990; Zhu & Cescotto 1995; Camacho & Ortiz 1997";
@@ -1354,12 +1364,12 @@ pub fn taylor_walls(fine: bool) -> Result<Outcome> {
     for deck in ["taylor_bar", "taylor_copper"] {
         for &dp in spacings {
             let ratio = (3.2e-3 / dp).round();
-            let mut plane = None;
+            let mut on_wall = None;
             for (label, case) in taylor_variants(deck, dp)? {
                 let r = taylor_run(&case)?;
                 let s = format!("{deck}, {label}, R0/Δp = {ratio}");
-                let Some((l0, d0)) = plane else {
-                    plane = Some((r.length, r.face));
+                let Some((l0, d0)) = on_wall else {
+                    on_wall = Some((r.length, r.face));
                     if deck == "taylor_copper" {
                         let held = ratio >= 16.0;
                         for (what, got, want, tol) in [
@@ -1377,26 +1387,17 @@ pub fn taylor_walls(fine: bool) -> Result<Outcome> {
                     continue;
                 };
                 let walls = "the same wall three ways (VALIDATION.md §F)";
-                checks.push(
-                    Check::new(
-                        "final length against the symmetry plane's",
-                        &s,
-                        r.length,
-                        "m",
-                        walls,
-                    )
-                    .within(l0, 0.02),
-                );
-                checks.push(
-                    Check::new(
-                        "face diameter against the symmetry plane's",
-                        &s,
-                        r.face,
-                        "m",
-                        walls,
-                    )
-                    .within(d0, 0.02),
-                );
+                for (what, got, want) in [
+                    ("final length against the wall's", r.length, l0),
+                    ("face diameter against the wall's", r.face, d0),
+                ] {
+                    let c = Check::new(what, &s, got, "m", walls);
+                    checks.push(if label == "symmetry plane" {
+                        c.reported(want)
+                    } else {
+                        c.within(want, 0.02)
+                    });
+                }
             }
         }
     }

@@ -106,23 +106,22 @@ fn flyer_plate_spall_gives_back_the_spall_strength() {
 }
 
 /// Issue 13, item 6 (Taylor bar, Johnson–Cook; `strike validate --case taylor`): 42CrMo4 at
-/// 287 m/s on a frictionless rigid wall (the symmetry plane z = 0), quarter model, R0/Δp = 8,
-/// against the finite-element
-/// results: the final length within 2 % (27.02 mm, +1.8 %) and the impact-face diameter, which
-/// converges to them from below as the lattice is refined (−8.5 % here, −0.2 % at R0/Δp = 16:
-/// [`taylor_bars_converge_and_their_walls_agree`]), within 10 % at this coarse resolution.
+/// 287 m/s on a frictionless rigid wall (the `[[wall]]` z = 0), quarter model, R0/Δp = 8,
+/// against the finite-element results: the final length within 2 % (26.95 mm, +1.5 %) and the
+/// impact-face diameter within 10 % at this coarse resolution (−4.0 % here, +3.9 % at
+/// R0/Δp = 16: [`taylor_bars_converge_and_their_walls_agree`]).
 #[test]
 fn taylor_bar_final_length_matches_the_finite_element_results() {
     validated(strike::validate::taylor(false));
 }
 
 /// Issue 13, item 6 (the copper Taylor test; `strike validate --case taylor_ofhc`): Johnson &
-/// Cook's OFHC copper rod (25.4 × 7.62 mm) at 190 m/s with the library's Johnson–Cook
-/// constants, against the recovered rod (L_f/L0 = 0.638, D_f/D0 = 1.78) at R0/Δp = 8 and 12:
-/// both figures converge toward the test (length +14.8 / +11.3 %, face −9.3 / −5.0 %), held
-/// within 12 % and 10 % at 12. The library's failure is off, as the rods were whole. With it
-/// on, the spall model breaks the rim of the face (README, Not yet) and the test fails: the
-/// rim's rubble spreads over the anvil, and the face reads 71 / 75 mm.
+/// Cook's OFHC copper rod (25.4 × 7.62 mm) at 190 m/s on the anvil (a `[[wall]]`) with the
+/// library's Johnson–Cook constants, against the recovered rod (L_f/L0 = 0.638,
+/// D_f/D0 = 1.78) at R0/Δp = 8 and 12: both figures converge toward the test (length +14.5 /
+/// +11.5 %, face −5.9 / −2.2 %), held within 12 % and 10 % at 12. The library's failure is
+/// off, as the rods were whole. With it on, the spall model breaks the rod (README, Not yet)
+/// and the test fails.
 #[test]
 fn ofhc_copper_taylor_rods_converge_to_johnson_and_cooks_tests() {
     validated(strike::validate::taylor_ofhc(false));
@@ -159,13 +158,13 @@ fn steinberg_guinan_flows_at_its_shocked_state() {
 
 /// Issue 13, items 5 and 6 (`strike validate --fine --case taylor --case taylor_walls`): the
 /// steel bar against the finite-element results at R0/Δp = 8 and 16, and the steel and copper
-/// bars on the symmetry plane, against their twin through the contact and on a fixed steel wall
-/// through the contact, agreeing within 2 % in final length and face diameter, the copper bar
-/// within 4 % (length) and 5 % (face) of the published results at R0/Δp = 16. About an hour and
-/// a half on 2 cores: `cargo test --release --test verification_materials -- --ignored`. It
-/// fails today on the walls: the twin's face diameter is −1.4 % of the symmetry plane's at
-/// R0/Δp = 8 but +3.2 % at 16 (steel; the fixed wall's +3.0 %), and −5.9 % at R0/Δp = 8 for
-/// copper; the lengths agree within 0.6 %.
+/// bars on their `[[wall]]`, against their twin through the contact and on a fixed steel wall
+/// through the contact, agreeing within 2 % in final length and face diameter (the symmetry
+/// plane reported beside them), the copper bar within 4 % (length) and 5 % (face) of the
+/// published results at R0/Δp = 16. About an hour and a half on 2 cores:
+/// `cargo test --release --test verification_materials -- --ignored`. It fails today on the
+/// walls: through the contact the faces are narrower than on the wall (README, Not yet); the
+/// lengths agree within 0.6 %.
 #[test]
 #[ignore = "long (the validation command), and failing: the walls disagree on the footprint (README, Not yet)"]
 fn taylor_bars_converge_and_their_walls_agree() {
