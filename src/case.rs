@@ -243,8 +243,7 @@ pub struct InteractionSpec {
 }
 
 /// A symmetry plane x_axis = position (mirrored ghost particles), or a frictionless rigid
-/// wall there (`wall`: the mirror images meet the bodies through the contact, see
-/// `boundary`).
+/// wall there (`wall`: a symmetry plane that only pushes, see `boundary`).
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct SymmetryPlane {
     pub axis: usize,

@@ -91,8 +91,8 @@ pub fn build<const D: usize>(case: &Case) -> Result<(Particles<D>, Model<D>)> {
     }
     check_overlap(case, &p)?;
 
-    // With a wall, body N + b is b's mirror image (see `boundary`): b's material; it is never
-    // integrated, and meets every body through the contact.
+    // With a wall, body N + b is b's mirror image (see `boundary`), of b's material (images
+    // are ghosts: never integrated).
     let n = case.bodies.len();
     let images = if case.symmetry.iter().any(|s| s.wall) {
         2
@@ -178,8 +178,10 @@ pub fn symmetry_planes(case: &Case) -> Vec<Plane> {
 /// image and the images of bodies welded to a, and otherwise the rule of a and b (their
 /// contact meets the wall's side as it meets b).
 fn wall_rule<const D: usize>(case: &Case, materials: &[Material], a: usize, b: usize) -> PairRule {
+    if a == b {
+        return PairRule::Wall;
+    }
     match pair_rule::<D>(case, materials, a, b) {
-        _ if a == b => PairRule::Wall,
         PairRule::Conserve => PairRule::Wall,
         rule => rule,
     }
@@ -324,5 +326,59 @@ fn deck_error(
         key: key.to_string(),
         message,
         help: Some(help.to_string()),
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// With a wall, each body meets its own image and the images of the bodies welded to it
+    /// pressed-only ([`PairRule::Wall`]), and the images of the bodies it is in contact with
+    /// through that contact; the images have their bodies' materials.
+    #[test]
+    fn bodies_meet_a_walls_images_as_they_meet_the_bodies() {
+        let deck = r#"
+[simulation]
+dimension = 2
+end_time = 1.0e-6
+[materials.al]
+library = "al_6061_t6"
+[materials.cu]
+library = "ofhc_copper"
+[[body]]
+name = "a"
+material = "al"
+spacing = 1.0e-3
+shape = { type = "rectangle", min = [0.0, 0.0], max = [0.01, 0.01] }
+[[body]]
+name = "b"
+material = "cu"
+spacing = 1.0e-3
+shape = { type = "rectangle", min = [0.01, 0.0], max = [0.02, 0.01] }
+[[body]]
+name = "c"
+material = "al"
+spacing = 1.0e-3
+shape = { type = "rectangle", min = [-0.01, 0.0], max = [0.0, 0.01] }
+[[interaction]]
+bodies = ["a", "c"]
+type = "welded"
+[[wall]]
+axis = "y"
+"#;
+        let case = crate::deck::parse(deck, "walls.toml").unwrap();
+        let (_, model) = build::<2>(&case).unwrap();
+        let rule = |a: u32, b: u32| *model.pairs.rule(a, b);
+        assert_eq!(model.pairs.bodies(), 6);
+        assert_eq!(rule(0, 3), PairRule::Wall);
+        assert_eq!(rule(0, 5), PairRule::Wall);
+        assert_eq!(rule(5, 0), PairRule::Wall);
+        assert!(matches!(rule(0, 4), PairRule::Contact(_)));
+        assert_eq!(rule(0, 4), rule(0, 1));
+        assert_eq!(model.body_material[4], model.body_material[1]);
+        // Without a wall, no images.
+        let case = crate::deck::parse(&deck.replace("[[wall]]", "[[symmetry]]"), "s.toml").unwrap();
+        assert_eq!(build::<2>(&case).unwrap().1.pairs.bodies(), 3);
     }
 }
