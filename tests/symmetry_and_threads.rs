@@ -148,7 +148,7 @@ fn body0_velocity(case: &Case) -> Vec<(f64, f64)> {
 /// `examples/bars_contact.toml` (±10 m/s, L/Δp = 100): the left bar alone on a wall at the
 /// interface follows the same bar on a symmetry plane step by step, to the bit, while it
 /// presses on the wall (to 15 µs; the wave's round trip 2L/c is 16.3 µs), and then leaves it
-/// at −9.57 m/s (CN-SPH −9.47; acoustic −10 m/s, the bars through the contact −9.60 / −9.47). On
+/// at −9.57 m/s (CN-SPH −9.50; acoustic −10 m/s, the bars through the contact −9.60 / −9.47). On
 /// the symmetry plane it is still held at the end and swings back past +5 m/s. Both
 /// formulations.
 #[test]

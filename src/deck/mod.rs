@@ -1400,8 +1400,8 @@ impl Ctx<'_> {
         Ok(out)
     }
 
-    /// The `[[symmetry]]` planes, then the `[[wall]]` ones (a frictionless rigid wall: the
-    /// same mirror, met through the contact).
+    /// The `[[symmetry]]` planes, then the `[[wall]]` ones (a frictionless rigid wall: a
+    /// symmetry plane that only pushes, see `boundary`).
     fn symmetry(
         &self,
         (planes, walls): (Option<&[Plane]>, Option<&[Plane]>),
