@@ -59,6 +59,7 @@ pub const DEFAULT_EXPONENT: f64 = 4.0;
 /// name the deck's line.
 pub fn build<const D: usize>(case: &Case) -> Result<(Particles<D>, Model<D>)> {
     let planes = symmetry_planes(case);
+    check_walls(case, &planes)?;
     let materials: Vec<Material> = case.materials.iter().map(Material::from_spec).collect();
     let mut p = Particles::<D>::default();
     for (b, body) in case.bodies.iter().enumerate() {
@@ -172,6 +173,32 @@ pub fn symmetry_planes(case: &Case) -> Vec<Plane> {
             }
         })
         .collect()
+}
+
+/// Every body lies on its walls' side: a symmetry plane may cut a body (the model keeps one
+/// side), a wall may not (the part beyond it would silently be lost).
+fn check_walls(case: &Case, planes: &[Plane]) -> Result<()> {
+    for plane in planes.iter().filter(|p| p.wall.is_some()) {
+        for (b, body) in case.bodies.iter().enumerate() {
+            let (lo, hi) = shapes::bounding_box(&body.shape);
+            let k = plane.axis;
+            let beyond = -plane.depth(lo[k]).min(plane.depth(hi[k]));
+            if beyond > 1e-6 * body.spacing {
+                let axis = ["x", "y", "z"][k];
+                return Err(deck_error(
+                    case,
+                    body.location,
+                    &format!("body[{b}].shape"),
+                    format!(
+                        "body '{}' reaches {beyond:e} m past the wall {axis} = {} (the bodies lie on the side of their centre)",
+                        body.name, plane.position
+                    ),
+                    "move the body to the wall's side, or the wall; a symmetry plane, not a wall, may cut a body",
+                ));
+            }
+        }
+    }
+    Ok(())
 }
 
 /// The rule between body a and the wall's image of body b: [`PairRule::Wall`] for a's own
@@ -380,5 +407,19 @@ axis = "y"
         // Without a wall, no images.
         let case = crate::deck::parse(&deck.replace("[[wall]]", "[[symmetry]]"), "s.toml").unwrap();
         assert_eq!(build::<2>(&case).unwrap().1.pairs.bodies(), 3);
+        // A wall through a body is a deck error that names the body; a symmetry plane there
+        // cuts it.
+        let through = deck.replace("axis = \"y\"", "axis = \"y\"\nposition = 0.004");
+        let case = crate::deck::parse(&through, "w.toml").unwrap();
+        let Err(Error::Deck { key, message, .. }) = build::<2>(&case) else {
+            panic!("a wall through the bodies was accepted");
+        };
+        assert_eq!(key, "body[0].shape", "{message}");
+        assert!(
+            message.contains("'a'") && message.contains("wall y = 0.004"),
+            "{message}"
+        );
+        let cut = through.replace("[[wall]]", "[[symmetry]]");
+        assert!(build::<2>(&crate::deck::parse(&cut, "c.toml").unwrap()).is_ok());
     }
 }
