@@ -94,19 +94,19 @@ struct Point<const D: usize> {
 struct Points<'a, const D: usize> {
     at: &'a [Point<D>],
     vol: &'a [f64],
-    body: &'a [u32],
 }
 
 /// The corrections of the real particles in `owned` (`out[i]`; `out` holds one for every real
-/// particle), from its neighbours of bodies `joined` to its own (the body itself, and welded
-/// bodies). Returns how many of them fell back to the uncorrected gradient.
+/// particle), from the neighbours j that `joined(i, j)` lets count: its own body's, and those it
+/// meets through the conservation equations (welded bodies, a wall's images while pressed).
+/// Returns how many of them fell back to the uncorrected gradient.
 ///
 /// ∇_i W_ij is radial, so A_i = −Σ_j V_j (1/r dW/dr) x_ij ⊗ x_ij is symmetric: six sums in 3D.
 pub fn corrections<const D: usize, K: Kernel>(
     kernel: K,
     p: &Particles<D>,
     nl: &NeighborList,
-    joined: impl Fn(u32, u32) -> bool + Sync,
+    joined: impl Fn(usize, usize) -> bool + Sync,
     owned: &Range<usize>,
     out: &mut Vec<Correction<D>>,
 ) -> usize {
@@ -126,7 +126,7 @@ pub(crate) fn corrections_on<const D: usize, K: Kernel>(
     kernel: K,
     p: &Particles<D>,
     nl: &NeighborList,
-    joined: impl Fn(u32, u32) -> bool + Sync,
+    joined: impl Fn(usize, usize) -> bool + Sync,
     owned: &Range<usize>,
     out: &mut Vec<Correction<D>>,
     wide: bool,
@@ -148,11 +148,7 @@ pub(crate) fn corrections_on<const D: usize, K: Kernel>(
         h: 0.0,
     });
     vol.push(0.0);
-    let points = Points {
-        at: &at,
-        vol: &vol,
-        body: &p.body,
-    };
+    let points = Points { at: &at, vol: &vol };
     crate::ranks::fill(out, p.n_real, owned, |i| {
         // Particles with no neighbour of another body (see `NeighborList::classify`) need no
         // check of the pair's bodies.
@@ -177,13 +173,13 @@ fn correction_avx2<const D: usize, K: Kernel>(
     list: &[u32],
     points: Points<D>,
     mixed: bool,
-    joined: &impl Fn(u32, u32) -> bool,
+    joined: &impl Fn(usize, usize) -> bool,
 ) -> Correction<D> {
     correction(kernel, i, list, points, mixed, joined)
 }
 
 /// Particle i's correction from its neighbour list (`mixed`: it has neighbours of other
-/// bodies, of which only those `joined` to its own count).
+/// bodies, of which only those j with `joined(i, j)` count).
 #[inline(always)]
 fn correction<const D: usize, K: Kernel>(
     kernel: K,
@@ -191,7 +187,7 @@ fn correction<const D: usize, K: Kernel>(
     list: &[u32],
     points: Points<D>,
     mixed: bool,
-    joined: &impl Fn(u32, u32) -> bool,
+    joined: &impl Fn(usize, usize) -> bool,
 ) -> Correction<D> {
     let (sums, support) = if mixed {
         (
@@ -223,8 +219,8 @@ fn correction<const D: usize, K: Kernel>(
     }
 }
 
-/// −Σ_j V_j (1/r dW/dr) x_ij ⊗ x_ij over i's list (`CHECK`: only neighbours of bodies joined
-/// to i's), its symmetric components per lane. The neighbours in i's support are queued first
+/// −Σ_j V_j (1/r dW/dr) x_ij ⊗ x_ij over i's list (`CHECK`: only the neighbours j with
+/// `joined(i, j)`), its symmetric components per lane. The neighbours in i's support are queued first
 /// (the list also holds the skin's; filtered four entries at a time), then summed [`LANES`] at
 /// a time, the last chunk filled up with the padding record, as in the rate pass (sending the
 /// whole list through the lanes instead made the CN-SPH cubes of `strike bench` 25 % slower;
@@ -238,7 +234,7 @@ fn moments<const D: usize, K: Kernel, const CHECK: bool>(
     i: usize,
     list: &[u32],
     points: Points<D>,
-    joined: &impl Fn(u32, u32) -> bool,
+    joined: &impl Fn(usize, usize) -> bool,
 ) -> ([[f64; LANES]; 6], Support) {
     let padding = (points.at.len() - 1) as u32;
     let pi = &points.at[i];
@@ -247,7 +243,7 @@ fn moments<const D: usize, K: Kernel, const CHECK: bool>(
     // Room for one more quad of entries past a full batch.
     let mut queue = [padding; BATCH + LANES];
     let mut queued = 0;
-    let joins = |j: u32| !CHECK || joined(points.body[i], points.body[j as usize]);
+    let joins = |j: u32| !CHECK || joined(i, j as usize);
     // 64 entries at a time, each one's bit of the support kept in a register (the words past
     // the second, of lists longer than a `Support` covers, are dropped); within them, four
     // entries at a time.
@@ -409,14 +405,14 @@ const BATCH: usize = 64;
 /// The symmetric components summed: the diagonal, then xy, xz, yz.
 const SYM: [(usize, usize); 6] = [(0, 0), (1, 1), (2, 2), (0, 1), (0, 2), (1, 2)];
 
-/// The Shepard sum S_i = Σ_j V_j W_ij (i itself included) over the neighbours of bodies
-/// `joined` to i's: the denominator of the paper's shape function N_ij = V_j W_ij / S_i, which
+/// The Shepard sum S_i = Σ_j V_j W_ij (i itself included) over the neighbours j with
+/// `joined(i, j)`: the denominator of the paper's shape function N_ij = V_j W_ij / S_i, which
 /// interpolates a constant exactly, at a surface too (see the module doc).
 pub fn shepard<const D: usize, K: Kernel>(
     kernel: K,
     p: &Particles<D>,
     nl: &NeighborList,
-    joined: impl Fn(u32, u32) -> bool + Sync,
+    joined: impl Fn(usize, usize) -> bool + Sync,
 ) -> Vec<f64> {
     (0..p.n_real)
         .into_par_iter()
@@ -424,7 +420,7 @@ pub fn shepard<const D: usize, K: Kernel>(
             let mut s = p.volume(i) * kernel.w::<D>(0.0, p.h[i]);
             for &j in nl.list(i) {
                 let j = j as usize;
-                if !joined(p.body[i], p.body[j]) {
+                if !joined(i, j) {
                     continue;
                 }
                 let r = (p.x[i] - p.x[j]).norm();
@@ -671,12 +667,19 @@ mod tests {
         nl.build(&p.x, &p.h, p.n_real, 1.0);
         let all = 0..p.n_real;
         let (mut wide, mut portable) = (Vec::new(), Vec::new());
-        corrections(CubicSpline, &p, &nl, |a, b| a == b, &all, &mut wide);
+        corrections(
+            CubicSpline,
+            &p,
+            &nl,
+            |i, j| p.body[i] == p.body[j],
+            &all,
+            &mut wide,
+        );
         corrections_on(
             CubicSpline,
             &p,
             &nl,
-            |a, b| a == b,
+            |i, j| p.body[i] == p.body[j],
             &all,
             &mut portable,
             false,
@@ -709,7 +712,14 @@ mod tests {
         let mut nl = NeighborList::default();
         nl.build(&p.x, &p.h, p.n_real, 0.0);
         let mut c = Vec::new();
-        corrections(CubicSpline, &p, &nl, |a, b| a == b, &(0..p.n_real), &mut c);
+        corrections(
+            CubicSpline,
+            &p,
+            &nl,
+            |i, j| p.body[i] == p.body[j],
+            &(0..p.n_real),
+            &mut c,
+        );
         let (inside, face, corner) = (c[4 + 4 * 9], c[4], c[0]);
         assert!(
             (inside.lambda_min - 1.0).abs() < 0.05,
@@ -747,7 +757,7 @@ mod tests {
             CubicSpline,
             &line,
             &nl,
-            |a, b| a == b,
+            |i, j| p.body[i] == p.body[j],
             &(0..line.n_real),
             &mut c,
         );

@@ -210,9 +210,23 @@ pub fn corrections<const D: usize, K: Kernel>(
     owned: &Range<usize>,
     out: &mut Vec<correction::Correction<D>>,
 ) -> usize {
-    // A wall's images count as the body's own, as a symmetry plane's ghosts do.
-    let joined = |a: u32, b: u32| {
-        a == b || matches!(model.pairs.rule(a, b), PairRule::Conserve | PairRule::Wall)
+    // A wall's image counts as the body's own while it and i are pressed together, as a
+    // symmetry plane's ghost does; once the face lifts off, the rate pass leaves the image out
+    // ([`pressed`], on the same records), and so does B: B's moments are then the free
+    // surface's, and the corrected gradient stays exact for a linear field there.
+    let ratio = model.smoothing_ratio;
+    let joined = |i: usize, j: usize| {
+        let (a, b) = (p.body[i], p.body[j]);
+        a == b
+            || match model.pairs.rule(a, b) {
+                PairRule::Conserve => true,
+                PairRule::Wall => {
+                    let (gi, gj) = (Gather::of(p, i, ratio), Gather::of(p, j, ratio));
+                    let xij: [f64; D] = std::array::from_fn(|k| gi.x[k] - gj.x[k]);
+                    pressed(&gi, &gj, &xij)
+                }
+                PairRule::Contact(_) => false,
+            }
     };
     correction::corrections(kernel, p, nl, joined, owned, out)
 }
@@ -346,6 +360,33 @@ struct Gather<const D: usize> {
 }
 
 impl<const D: usize> Gather<D> {
+    /// Particle i's record (`ratio`: the model's h0/Δp).
+    #[inline]
+    fn of(p: &Particles<D>, i: usize, ratio: f64) -> Self {
+        let sr2 = p.stress(i) / (p.rho[i] * p.rho[i]);
+        Gather {
+            x: arr(&p.x[i]),
+            h: p.h[i],
+            body: p.body[i],
+            failed: p.damage[i] >= 1.0,
+            dp: p.h0[i] / ratio,
+            v: arr(&p.v[i]),
+            u: arr(&p.u[i]),
+            m: p.m[i],
+            vol: p.m[i] / p.rho[i],
+            rho: p.rho[i],
+            c: p.c[i],
+            sr2: std::array::from_fn(|k| {
+                let (a, b) = SYM[k];
+                if a < D && b < D {
+                    sr2[(a, b)]
+                } else {
+                    0.0
+                }
+            }),
+        }
+    }
+
     /// The neighbour that fills the unused lanes of the last chunk: massless, at rest and far
     /// beyond every support, so that all its terms are exactly zero (and finite).
     fn padding() -> Self {
@@ -445,30 +486,8 @@ fn compute_rates_on<const D: usize, K: Kernel>(
     out.gather.clear();
     // Room for the padding too: pushed past an exact fit, the vector would double.
     out.gather.reserve_exact(all + 1);
-    out.gather.par_extend((0..all).into_par_iter().map(|i| {
-        let sr2 = p.stress(i) / (p.rho[i] * p.rho[i]);
-        Gather {
-            x: arr(&p.x[i]),
-            h: p.h[i],
-            body: p.body[i],
-            failed: p.damage[i] >= 1.0,
-            dp: p.h0[i] / ratio,
-            v: arr(&p.v[i]),
-            u: arr(&p.u[i]),
-            m: p.m[i],
-            vol: p.m[i] / p.rho[i],
-            rho: p.rho[i],
-            c: p.c[i],
-            sr2: std::array::from_fn(|k| {
-                let (a, b) = SYM[k];
-                if a < D && b < D {
-                    sr2[(a, b)]
-                } else {
-                    0.0
-                }
-            }),
-        }
-    }));
+    out.gather
+        .par_extend((0..all).into_par_iter().map(|i| Gather::of(p, i, ratio)));
     out.gather.push(Gather::padding());
     out.sb.clear();
     let cn = !corr.is_empty();
@@ -1464,8 +1483,11 @@ type = "welded"
             assert_eq!(a, b, "particle {i}");
         }
         // CN-SPH: the correction pass, then the rates with B.
-        let joined =
-            |a: u32, b: u32| a == b || matches!(model.pairs.rule(a, b), PairRule::Conserve);
+        let bodies = p.body.clone();
+        let joined = |i: usize, j: usize| {
+            let (a, b) = (bodies[i], bodies[j]);
+            a == b || matches!(model.pairs.rule(a, b), PairRule::Conserve)
+        };
         let (mut cw, mut cp) = (Vec::new(), Vec::new());
         correction::corrections_on(CubicSpline, &p, &nl, joined, &all, &mut cw, true);
         correction::corrections_on(CubicSpline, &p, &nl, joined, &all, &mut cp, false);
@@ -1576,6 +1598,83 @@ shape = { type = "rectangle", min = [0.0, 0.0], max = [8.0e-3, 6.0e-3] }
             force.norm() < 1e-12 * scale,
             "net force {force:?} of {scale}"
         );
+    }
+
+    /// CN-SPH beside a wall: B counts a wall's images only while they are pressed on the
+    /// particle, as the rate pass does (`pressed`). A block on the wall y = 0 in a linear
+    /// velocity field v = v0 ŷ + G x: lifting off (v0 > 0, unstressed), the face's B is the
+    /// free surface's and the corrected L is G to round-off at every particle; pressed on
+    /// (v0 < 0), the face's B is the symmetry plane's, images counted. Until 2026-11-27 B
+    /// counted the images always, and a lifted face's L was off by the half of the support
+    /// that the rate pass no longer summed.
+    #[test]
+    fn corrected_gradients_count_a_walls_images_only_while_pressed() {
+        let deck = r#"
+[simulation]
+dimension = 2
+end_time = 1.0
+[materials.al]
+density = 2700.0
+eos = { type = "linear" }
+strength = { type = "elastic", youngs_modulus = 68.9e9, poissons_ratio = 0.33 }
+[[body]]
+name = "block"
+material = "al"
+spacing = 1.0e-3
+shape = { type = "rectangle", min = [0.0, 0.0], max = [8.0e-3, 6.0e-3] }
+[[wall]]
+axis = "y"
+"#;
+        let case = crate::deck::parse(deck, "wall.toml").unwrap();
+        let (mut p, model) = crate::setup::build::<2>(&case).unwrap();
+        let wall = [crate::boundary::Plane {
+            axis: 1,
+            position: 0.0,
+            side: 1.0,
+            wall: Some(1),
+        }];
+        let g = Tensor::<2>::new(30.0, 0.0, 0.0, 20.0);
+        let face: Vec<usize> = (0..p.n_real).filter(|&i| p.x[i][1] < 1e-3).collect();
+        assert_eq!(face.len(), 8);
+        for (v0, lifting) in [(5.0, true), (-5.0, false)] {
+            p.truncate_to_real();
+            for i in 0..p.n_real {
+                p.v[i] = g * p.x[i] + Vector::<2>::new(0.0, v0);
+            }
+            crate::boundary::rebuild_ghosts(&mut p, &wall);
+            assert!(p.len() > p.n_real);
+            let mut nl = NeighborList::default();
+            nl.build(&p.x, &p.h, p.n_real, 0.0);
+            let (mut c, mut alone, mut mirrored) = (Vec::new(), Vec::new(), Vec::new());
+            corrections(CubicSpline, &p, &nl, &model, &(0..p.n_real), &mut c);
+            let all = 0..p.n_real;
+            let body = &p.body;
+            correction::corrections(
+                CubicSpline,
+                &p,
+                &nl,
+                |i, j| body[i] == body[j],
+                &all,
+                &mut alone,
+            );
+            correction::corrections(CubicSpline, &p, &nl, |_, _| true, &all, &mut mirrored);
+            let want = if lifting { &alone } else { &mirrored };
+            for &i in &face {
+                assert_ne!(alone[i].b, mirrored[i].b, "particle {i}");
+                assert_eq!(c[i].b, want[i].b, "particle {i}, lifting: {lifting}");
+            }
+            if lifting {
+                let mut b: Vec<Tensor<2>> = c.iter().map(|c| c.b).collect();
+                b.resize(p.len(), Tensor::identity());
+                let rates = all_rates(&p, &nl, &model, &b);
+                let worst = rates
+                    .particles
+                    .iter()
+                    .map(|r| (r.grad_v - g).norm() / g.norm())
+                    .fold(0.0, f64::max);
+                assert!(worst < 1e-12, "L against G: {worst}");
+            }
+        }
     }
 
     /// CN-SPH's continuity, dρ_i/dt = ρ_i Σ_j V_j v_ij·∇̃_i W_ij = −ρ_i tr L_i: for a linear

@@ -250,8 +250,15 @@ pub fn linear_field_errors<const D: usize>(n: usize, jitter: f64, which: &[usize
     nl.build(&p.x, &p.h, p.n_real, 0.0);
     let mut c = Vec::new();
     // A 9² or 7³ block has no particle whose matrix needs the fallback.
-    corrections(CubicSpline, &p, &nl, |a, b| a == b, &(0..p.n_real), &mut c);
-    let shepard = shepard(CubicSpline, &p, &nl, |a, b| a == b);
+    corrections(
+        CubicSpline,
+        &p,
+        &nl,
+        |i, j| p.body[i] == p.body[j],
+        &(0..p.n_real),
+        &mut c,
+    );
+    let shepard = shepard(CubicSpline, &p, &nl, |i, j| p.body[i] == p.body[j]);
     let mut e = [0.0_f64; 4];
     for &i in which {
         e[0] = e[0].max(gradient(&p, &nl, i, &c[i].b).norm());
