@@ -96,6 +96,11 @@ struct Points<'a, const D: usize> {
     vol: &'a [f64],
 }
 
+/// The `joined` of a model with no welds and no walls: i and j of the same body.
+pub fn same_body<const D: usize>(p: &Particles<D>) -> impl Fn(usize, usize) -> bool + Sync + '_ {
+    move |i, j| p.body[i] == p.body[j]
+}
+
 /// The corrections of the real particles in `owned` (`out[i]`; `out` holds one for every real
 /// particle), from the neighbours j that `joined(i, j)` lets count: its own body's, and those it
 /// meets through the conservation equations (welded bodies, a wall's images while pressed).
@@ -667,19 +672,12 @@ mod tests {
         nl.build(&p.x, &p.h, p.n_real, 1.0);
         let all = 0..p.n_real;
         let (mut wide, mut portable) = (Vec::new(), Vec::new());
-        corrections(
-            CubicSpline,
-            &p,
-            &nl,
-            |i, j| p.body[i] == p.body[j],
-            &all,
-            &mut wide,
-        );
+        corrections(CubicSpline, &p, &nl, same_body(&p), &all, &mut wide);
         corrections_on(
             CubicSpline,
             &p,
             &nl,
-            |i, j| p.body[i] == p.body[j],
+            same_body(&p),
             &all,
             &mut portable,
             false,
@@ -712,14 +710,7 @@ mod tests {
         let mut nl = NeighborList::default();
         nl.build(&p.x, &p.h, p.n_real, 0.0);
         let mut c = Vec::new();
-        corrections(
-            CubicSpline,
-            &p,
-            &nl,
-            |i, j| p.body[i] == p.body[j],
-            &(0..p.n_real),
-            &mut c,
-        );
+        corrections(CubicSpline, &p, &nl, same_body(&p), &(0..p.n_real), &mut c);
         let (inside, face, corner) = (c[4 + 4 * 9], c[4], c[0]);
         assert!(
             (inside.lambda_min - 1.0).abs() < 0.05,
@@ -757,7 +748,7 @@ mod tests {
             CubicSpline,
             &line,
             &nl,
-            |i, j| p.body[i] == p.body[j],
+            same_body(&p),
             &(0..line.n_real),
             &mut c,
         );

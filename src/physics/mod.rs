@@ -1534,9 +1534,8 @@ type = "welded"
         }
     }
 
-    /// An elastic aluminium block of 8 × 6 mm on a 1 mm lattice (2D), as set up from a deck.
-    fn elastic_block() -> (Particles<2>, Model<2>) {
-        let deck = r#"
+    /// The deck of [`elastic_block`].
+    const ELASTIC_BLOCK: &str = r#"
 [simulation]
 dimension = 2
 end_time = 1.0
@@ -1550,7 +1549,10 @@ material = "al"
 spacing = 1.0e-3
 shape = { type = "rectangle", min = [0.0, 0.0], max = [8.0e-3, 6.0e-3] }
 "#;
-        let case = crate::deck::parse(deck, "block.toml").unwrap();
+
+    /// An elastic aluminium block of 8 × 6 mm on a 1 mm lattice (2D), as set up from a deck.
+    fn elastic_block() -> (Particles<2>, Model<2>) {
+        let case = crate::deck::parse(ELASTIC_BLOCK, "block.toml").unwrap();
         crate::setup::build::<2>(&case).unwrap()
     }
 
@@ -1609,23 +1611,8 @@ shape = { type = "rectangle", min = [0.0, 0.0], max = [8.0e-3, 6.0e-3] }
     /// that the rate pass no longer summed.
     #[test]
     fn corrected_gradients_count_a_walls_images_only_while_pressed() {
-        let deck = r#"
-[simulation]
-dimension = 2
-end_time = 1.0
-[materials.al]
-density = 2700.0
-eos = { type = "linear" }
-strength = { type = "elastic", youngs_modulus = 68.9e9, poissons_ratio = 0.33 }
-[[body]]
-name = "block"
-material = "al"
-spacing = 1.0e-3
-shape = { type = "rectangle", min = [0.0, 0.0], max = [8.0e-3, 6.0e-3] }
-[[wall]]
-axis = "y"
-"#;
-        let case = crate::deck::parse(deck, "wall.toml").unwrap();
+        let deck = format!("{ELASTIC_BLOCK}[[wall]]\naxis = \"y\"\n");
+        let case = crate::deck::parse(&deck, "wall.toml").unwrap();
         let (mut p, model) = crate::setup::build::<2>(&case).unwrap();
         let wall = [crate::boundary::Plane {
             axis: 1,

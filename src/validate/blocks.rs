@@ -10,7 +10,7 @@ use crate::error::Result;
 use crate::kernel::{moments, CubicSpline, Kernel, WendlandC2};
 use crate::neighbors::NeighborList;
 use crate::particles::{Particles, Tensor, Vector};
-use crate::physics::correction::{corrections, shepard};
+use crate::physics::correction::{corrections, same_body, shepard};
 use crate::physics::{colour_states, compute_rates, Rates};
 
 /// A fixed pseudo-random sequence uniform on [−½, ½) from `seed` (Knuth's MMIX linear
@@ -250,15 +250,8 @@ pub fn linear_field_errors<const D: usize>(n: usize, jitter: f64, which: &[usize
     nl.build(&p.x, &p.h, p.n_real, 0.0);
     let mut c = Vec::new();
     // A 9² or 7³ block has no particle whose matrix needs the fallback.
-    corrections(
-        CubicSpline,
-        &p,
-        &nl,
-        |i, j| p.body[i] == p.body[j],
-        &(0..p.n_real),
-        &mut c,
-    );
-    let shepard = shepard(CubicSpline, &p, &nl, |i, j| p.body[i] == p.body[j]);
+    corrections(CubicSpline, &p, &nl, same_body(&p), &(0..p.n_real), &mut c);
+    let shepard = shepard(CubicSpline, &p, &nl, same_body(&p));
     let mut e = [0.0_f64; 4];
     for &i in which {
         e[0] = e[0].max(gradient(&p, &nl, i, &c[i].b).norm());
