@@ -16,11 +16,12 @@
 //! symmetry are the same boundary (zero normal velocity, zero shear): the run is the symmetry
 //! plane's to the bit. Where the plane would pull, the wall lets go and the face is free;
 //! CN-SPH's correction B then leaves the image out too (`physics::corrections`), so a lifted
-//! face is corrected as the free surface it is. Other bodies meet b's image as they meet b (through the contact). A symmetry plane in a
-//! wall's place holds a face in tension: an elastic bar on it never rebounds
-//! (`tests/symmetry_and_threads.rs`), and under the Taylor rod of `examples/taylor_copper.toml`
-//! it holds the face's inner half at up to +6.7 GPa of σ_zz (1.3 µs, when the radial release
-//! meets on the axis) and in tension for 57 of the 80 µs.
+//! face is corrected as the free surface it is. Other bodies meet b's image as they meet b
+//! (through the contact). A symmetry plane in a wall's place holds a face in tension: an
+//! elastic bar on it never rebounds (`tests/symmetry_and_threads.rs`), and under the Taylor
+//! rod of `examples/taylor_copper.toml` it holds the face's inner half at up to +6.7 GPa of
+//! σ_zz (1.3 µs, when the radial release meets on the axis) and in tension for 57 of the
+//! 80 µs.
 
 use crate::particles::Particles;
 use rayon::prelude::*;

@@ -225,10 +225,11 @@ fn correction<const D: usize, K: Kernel>(
 }
 
 /// −Σ_j V_j (1/r dW/dr) x_ij ⊗ x_ij over i's list (`CHECK`: only the neighbours j with
-/// `joined(i, j)`), its symmetric components per lane. The neighbours in i's support are queued first
-/// (the list also holds the skin's; filtered four entries at a time), then summed [`LANES`] at
-/// a time, the last chunk filled up with the padding record, as in the rate pass (sending the
-/// whole list through the lanes instead made the CN-SPH cubes of `strike bench` 25 % slower;
+/// `joined(i, j)`), its symmetric components per lane. The neighbours in i's support are
+/// queued first (the list also holds the skin's; filtered four entries at a time), then summed
+/// [`LANES`] at a time, the last chunk filled up with the padding record, as in the rate pass
+/// (sending the whole list through the lanes instead made the CN-SPH cubes of `strike bench`
+/// 25 % slower;
 /// queueing each neighbour's x_ij and r² from the filter, to spare the sums their gathers,
 /// 4 % slower than gathering again). Also returns which of the first [`SUPPORT_ENTRIES`]
 /// entries lie in the support (see [`Support`]).
@@ -748,7 +749,7 @@ mod tests {
             CubicSpline,
             &line,
             &nl,
-            same_body(&p),
+            same_body(&line),
             &(0..line.n_real),
             &mut c,
         );
