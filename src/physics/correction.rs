@@ -229,9 +229,8 @@ fn correction<const D: usize, K: Kernel>(
 /// queued first (the list also holds the skin's; filtered four entries at a time), then summed
 /// [`LANES`] at a time, the last chunk filled up with the padding record, as in the rate pass
 /// (sending the whole list through the lanes instead made the CN-SPH cubes of `strike bench`
-/// 25 % slower;
-/// queueing each neighbour's x_ij and r² from the filter, to spare the sums their gathers,
-/// 4 % slower than gathering again). Also returns which of the first [`SUPPORT_ENTRIES`]
+/// 25 % slower; queueing each neighbour's x_ij and r² from the filter, to spare the sums their
+/// gathers, 4 % slower than gathering again). Also returns which of the first [`SUPPORT_ENTRIES`]
 /// entries lie in the support (see [`Support`]).
 #[inline(always)]
 #[allow(clippy::needless_range_loop)] // lane loops read as the lanes' own
