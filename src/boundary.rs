@@ -185,14 +185,32 @@ fn mirror<const D: usize>(p: &mut Particles<D>, range: Range<usize>, plane: &Pla
             .with_min_len(MIN)
             .for_each(|v| v[k] = -v[k]);
     }
-    p.s[r].par_iter_mut().with_min_len(MIN).for_each(|s| {
-        for l in 0..D {
-            if l != k {
-                s[(k, l)] = -s[(k, l)];
-                s[(l, k)] = -s[(l, k)];
-            }
+    p.dv[r.clone()]
+        .par_iter_mut()
+        .with_min_len(MIN)
+        .for_each(|v| v[k] = -v[k]);
+    p.s[r.clone()]
+        .par_iter_mut()
+        .with_min_len(MIN)
+        .for_each(|s| mirror_tensor(s, k));
+    p.strain_rate[r]
+        .par_iter_mut()
+        .with_min_len(MIN)
+        .for_each(|s| mirror_tensor(s, k));
+}
+
+/// A tensor seen in the mirror of the plane normal to axis k: M T M with M = I − 2 e_k e_kᵀ,
+/// the components with one index k change sign.
+fn mirror_tensor<T: nalgebra::Scalar + Copy + std::ops::Neg<Output = T>, const D: usize>(
+    t: &mut nalgebra::SMatrix<T, D, D>,
+    k: usize,
+) {
+    for l in 0..D {
+        if l != k {
+            t[(k, l)] = -t[(k, l)];
+            t[(l, k)] = -t[(l, k)];
         }
-    });
+    }
 }
 
 #[cfg(test)]

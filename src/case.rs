@@ -85,6 +85,8 @@ pub struct Simulation {
     /// Monaghan–Gingold α (default 1) and β (default 2).
     pub viscosity_alpha: f64,
     pub viscosity_beta: f64,
+    /// The viscosity's limiter κ (default [`crate::physics::viscosity::LIMITER`]; 0: off).
+    pub viscosity_limiter: f64,
     /// Gravity (m/s²), z = 0 in 2D.
     pub gravity: [f64; 3],
     /// h stays within [h_min_ratio, h_max_ratio] × h0 (defaults 0.5 and 2).
@@ -311,7 +313,10 @@ impl Case {
             ),
             (
                 "simulation.viscosity".into(),
-                format!("alpha {:?}, beta {:?}", s.viscosity_alpha, s.viscosity_beta),
+                format!(
+                    "alpha {:?}, beta {:?}, limiter {:?}",
+                    s.viscosity_alpha, s.viscosity_beta, s.viscosity_limiter
+                ),
             ),
             ("simulation.gravity".into(), format!("{:?}", s.gravity)),
             (

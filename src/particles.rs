@@ -37,7 +37,9 @@ macro_rules! for_each_field {
             damage,
             body,
             id,
-            contact_force
+            contact_force,
+            strain_rate,
+            dv
         )
     };
 }
@@ -93,6 +95,14 @@ pub struct Particles<const D: usize> {
     pub id: Vec<u32>,
     /// Contact force on the particle (N), from the last force evaluation.
     pub contact_force: Vec<Vector<D>>,
+    /// The strain rate D = sym L of the last step (1/s), in single precision: what the
+    /// artificial viscosity's limiter reads of the flow (`physics::viscosity`).
+    pub strain_rate: Vec<SMatrix<f32, D, D>>,
+    /// What the continuity equation and the velocity gradient add to [`Particles::v`] (m/s),
+    /// in single precision: v + dv is the velocity at the middle of the coming step, v^{n+½},
+    /// extrapolated from the last two accelerations (see `integrate`, "Staggered material
+    /// update").
+    pub dv: Vec<SVector<f32, D>>,
     /// Number of real particles; `len() - n_real` are ghosts.
     pub n_real: usize,
 }
@@ -106,7 +116,7 @@ impl<const D: usize> serde::Serialize for RealParticles<'_, D> {
         use serde::ser::SerializeStruct;
         let (p, n) = (self.0, self.0.n_real);
         // The fields of `Particles` in their order, then n_real.
-        let mut st = ser.serialize_struct("Particles", 22)?;
+        let mut st = ser.serialize_struct("Particles", 24)?;
         macro_rules! fields {
             ($($f:ident),*) => { $(st.serialize_field(stringify!($f), &p.$f[..n])?;)* };
         }
@@ -161,6 +171,8 @@ impl<const D: usize> Particles<D> {
         self.body.push(body);
         self.id.push(id);
         self.contact_force.push(Vector::<D>::zeros());
+        self.strain_rate.push(SMatrix::<f32, D, D>::zeros());
+        self.dv.push(SVector::<f32, D>::zeros());
         self.n_real = self.x.len();
     }
 

@@ -323,7 +323,7 @@ fn hertz_spheres_converge() {
 // Separation at low speed
 
 /// Bars at ±10 m/s with L/Δp = 100 and 200 (`strike validate --case slow_bars`) part at
-/// ∓10 m/s within 5 % (CN-SPH: from L/Δp = 200, improving with refinement); the contact pulse
+/// ∓10 m/s within 5 %, improving with refinement, in both formulations; the contact pulse
 /// lasts 2L/c within 5 % (at half its plateau), is never tensile and exactly zero once they
 /// part. The paper's form, side by side, lets them part 25 % too fast.
 #[test]

@@ -77,8 +77,9 @@ fn rubber_rings_rebound_and_separate_without_fracture() {
 /// corrected gradients make the kernel consistent, not stable in tension, Belytschko et al.
 /// 2000, IJNME 48:1359, whose analysis puts the instability in the Eulerian kernel, which
 /// CN-SPH keeps): conventional SPH ends with over 900 particles closer than Δp/2 to one of their
-/// own body (64 at the start, none with ε = 0.3), and CN-SPH's rings pair up as fast and blow
-/// up at about 0.8 ms.
+/// own body (64 at the start, none with ε = 0.3), and CN-SPH's with about 200 (until the
+/// viscosity's limiter and the mid-step material update of 2026-11-28 they paired as fast as
+/// conventional SPH's and blew up at about 0.8 ms). Held: more than twice the start's.
 #[test]
 fn rubber_rings_need_artificial_stress_in_both_formulations() {
     let mut deck = load("rubber_rings");
@@ -102,7 +103,7 @@ fn rubber_rings_need_artificial_stress_in_both_formulations() {
             t
         );
         assert!(
-            err.is_some() || n > 4 * 64,
+            err.is_some() || n > 2 * 64,
             "no tensile instability: {n} particles paired"
         );
     }

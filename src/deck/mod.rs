@@ -842,6 +842,7 @@ impl Ctx<'_> {
             None => 1.2,
         };
         let (mut viscosity_alpha, mut viscosity_beta) = (1.0, 2.0);
+        let mut viscosity_limiter = crate::physics::viscosity::LIMITER;
         if let Some(v) = &s.viscosity {
             if let Some(a) = &v.alpha {
                 viscosity_alpha = self.non_negative(
@@ -855,6 +856,17 @@ impl Ctx<'_> {
                     b,
                     "simulation.viscosity.beta",
                     "Monaghan–Gingold β ≥ 0, typically 2 for impact",
+                )?;
+            }
+            if let Some(k) = &v.limiter {
+                viscosity_limiter = self.check(
+                    k,
+                    "simulation.viscosity.limiter",
+                    |x| (0.0..=1.0).contains(&x),
+                    "must be in [0, 1]",
+                    "the closing speed, as a fraction of the sound speed, below which a pair's \
+                     velocity jump is reconstructed and limited (default 0.003; 0: the plain \
+                     viscosity)",
                 )?;
             }
         }
@@ -931,6 +943,7 @@ impl Ctx<'_> {
                 smoothing_ratio,
                 viscosity_alpha,
                 viscosity_beta,
+                viscosity_limiter,
                 gravity,
                 h_min_ratio,
                 h_max_ratio,

@@ -175,6 +175,7 @@ pub struct Simulation {
 pub struct Viscosity {
     pub alpha: Num,
     pub beta: Num,
+    pub limiter: Num,
 }
 
 #[derive(Debug, serde::Deserialize)]

@@ -16,7 +16,7 @@ use std::io::{Seek, SeekFrom, Write};
 use std::path::Path;
 
 /// Format version, checked on reading.
-pub const FORMAT: u32 = 3;
+pub const FORMAT: u32 = 4;
 
 /// The running totals behind `summary.json`.
 #[derive(Debug, Clone, Default, PartialEq, Serialize, Deserialize)]

@@ -2,10 +2,12 @@
 //! gather pass over each real particle's neighbours. Per pair, with x_ij = x_i − x_j,
 //! v_ij = v_i − v_j, h_ij = (h_i + h_j)/2 and ∇_i W_ij = (dW/dr) x_ij/r_ij:
 //!
-//! - continuity: dρ_i/dt = Σ_{j∈N_i} m_j v_ij·∇_i W_ij (CN-SPH: see below)
-//! - velocity gradient: L_i = −Σ_{j∈N_i} V_j v_ij ⊗ ∇_i W_ij
+//! - continuity: dρ_i/dt = Σ_{j∈N_i} m_j w_ij·∇_i W_ij (CN-SPH: see below)
+//! - velocity gradient: L_i = −Σ_{j∈N_i} V_j w_ij ⊗ ∇_i W_ij, w = v + dv the velocity at the
+//!   step's middle (`integrate`, "Staggered material update"; every other term takes v)
 //! - momentum: dv_i/dt = Σ_{j∈N_i} m_j T_ij ∇_i W_ij + f_c,i/m_i + g,
-//!   T_ij = σ_i/ρ_i² + σ_j/ρ_j² − Π_ij I + A_ij
+//!   T_ij = σ_i/ρ_i² + σ_j/ρ_j² − Π_ij I + A_ij, Π_ij the viscosity on the pair's limited
+//!   velocity jump ([`viscosity`])
 //! - energy: de_i/dt = −½ Σ_{j∈N_i} m_j v_ij·(T_ij ∇_i W_ij), the pairwise form whose sum
 //!   Σ m_i de_i/dt is exactly minus the power of the internal forces, so total energy is
 //!   conserved by the spatial discretisation (DESIGN.md §2 allows it in place of σ:D/ρ);
@@ -122,6 +124,8 @@ pub struct Model<const D: usize> {
     pub pairs: PairTable,
     pub alpha: f64,
     pub beta: f64,
+    /// The viscosity's limiter κ ([`viscosity::limited`]; 0: off).
+    pub limiter: f64,
     pub gravity: Vector<D>,
     pub cfl: f64,
     /// h0 / Δp.
@@ -349,7 +353,7 @@ struct Gather<const D: usize> {
     /// Initial spacing Δp = h0/ratio.
     dp: f64,
     v: [f64; D],
-    u: [f64; D],
+    u: [f32; D],
     m: f64,
     /// V = m/ρ.
     vol: f64,
@@ -357,6 +361,11 @@ struct Gather<const D: usize> {
     c: f64,
     /// σ/ρ², its symmetric components in [`SYM`] order (6 loads a neighbour instead of 9).
     sr2: [f64; 6],
+    /// v + dv is the velocity of the continuity equation and the velocity gradient
+    /// ([`Particles::dv`]).
+    dv: [f32; D],
+    /// The last step's strain rate D, in [`SYM`] order ([`Particles::strain_rate`]).
+    d: [f32; 6],
 }
 
 impl<const D: usize> Gather<D> {
@@ -371,7 +380,7 @@ impl<const D: usize> Gather<D> {
             failed: p.damage[i] >= 1.0,
             dp: p.h0[i] / ratio,
             v: arr(&p.v[i]),
-            u: arr(&p.u[i]),
+            u: std::array::from_fn(|k| p.u[i][k] as f32),
             m: p.m[i],
             vol: p.m[i] / p.rho[i],
             rho: p.rho[i],
@@ -380,6 +389,15 @@ impl<const D: usize> Gather<D> {
                 let (a, b) = SYM[k];
                 if a < D && b < D {
                     sr2[(a, b)]
+                } else {
+                    0.0
+                }
+            }),
+            dv: std::array::from_fn(|k| p.dv[i][k]),
+            d: std::array::from_fn(|k| {
+                let (a, b) = SYM[k];
+                if a < D && b < D {
+                    p.strain_rate[i][(a, b)]
                 } else {
                     0.0
                 }
@@ -405,6 +423,8 @@ impl<const D: usize> Gather<D> {
             rho: 1.0,
             c: 0.0,
             sr2: [0.0; 6],
+            dv: [0.0; D],
+            d: [0.0; 6],
         }
     }
 }
@@ -824,7 +844,7 @@ fn particle_rates<const D: usize, K: Kernel, const ART: bool, const CN: bool>(
                         for a in 0..D {
                             fc[a] += gi.m * gj.m * t[a];
                             vt += vij[a] * t[a];
-                            ut += (gi.u[a] - gj.u[a]) * t[a];
+                            ut += (f64::from(gi.u[a]) - f64::from(gj.u[a])) * t[a];
                         }
                         de_contact -= 0.5 * gj.m * vt;
                         de_lag_contact -= 0.5 * gj.m * ut;
@@ -946,7 +966,8 @@ fn conserve_chunk<const D: usize, K: Kernel, const ART: bool, const CN: bool>(
     } else {
         [[0.0; LANES]; 6]
     };
-    let (alpha, beta) = (model.alpha, model.beta);
+    let (alpha, beta, limiter) = (model.alpha, model.beta, model.limiter);
+    let di: [f64; 6] = std::array::from_fn(|k| f64::from(gi.d[k]));
     for l in 0..LANES {
         let gj = g[l];
         let xij: [f64; D] = std::array::from_fn(|k| gi.x[k] - gj.x[k]);
@@ -964,20 +985,35 @@ fn conserve_chunk<const D: usize, K: Kernel, const ART: bool, const CN: bool>(
         // same for every pair of i, so the sum is taken on the plain ∇W and B_i applied once
         // at the end, L_i = −(Σ_j V_j v_ij ⊗ ∇_i W_ij) B_iᵀ and dρ_i/dt = −ρ_i tr L_i
         // ([`finish_corrected`]).
+        // The material's rates take the velocity at the step's middle, w = v + dv
+        // (`integrate`, "Staggered material update"); the forces take v.
+        let wij: [f64; D] =
+            std::array::from_fn(|k| vij[k] + (f64::from(gi.dv[k]) - f64::from(gj.dv[k])));
         if !CN {
-            s.drho[l] += mj * dot(&vij, &grad);
+            s.drho[l] += mj * dot(&wij, &grad);
         }
         for a in 0..D {
-            let va = vij[a] * gj.vol;
+            let va = wij[a] * gj.vol;
             for b in 0..D {
                 s.grad_v[a][b][l] -= va * grad[b];
             }
         }
+        // Each side's prediction of the pair's jump from its own strain rate, x_ij·D·x_ij.
+        let (mut qi, mut qj) = (0.0, 0.0);
+        for a in 0..D {
+            for b in a..D {
+                let k = sym(a, b);
+                let xx = if a == b { 1.0 } else { 2.0 } * xij[a] * xij[b];
+                qi += xx * di[k];
+                qj += xx * f64::from(gj.d[k]);
+            }
+        }
+        let c_mean = 0.5 * (gi.c + gj.c);
         let (pi, mu) = viscosity::monaghan_gingold(
-            dot(&vij, &xij),
+            viscosity::limited(dot(&vij, &xij), (qi, qj), limiter * c_mean * r),
             r2,
             hij,
-            0.5 * (gi.c + gj.c),
+            c_mean,
             0.5 * (gi.rho + gj.rho),
             alpha,
             beta,
@@ -1031,7 +1067,7 @@ fn conserve_chunk<const D: usize, K: Kernel, const ART: bool, const CN: bool>(
         for a in 0..D {
             s.acc[a][l] += tg[a] * mj;
             veg += vij[a] * eg[a];
-            ueg += (gi.u[a] - gj.u[a]) * eg[a];
+            ueg += (f64::from(gi.u[a]) - f64::from(gj.u[a])) * eg[a];
         }
         s.de[l] -= 0.5 * mj * veg;
         s.de_lag[l] -= 0.5 * mj * ueg;
@@ -1139,7 +1175,7 @@ fn cut_pair<const D: usize, K: Kernel, const CN: bool>(
     for a in 0..D {
         cuts.acc[a] -= cut[a] * mj;
         cuts.de += mj * (gi.v[a] - gj.v[a]) * share[a];
-        cuts.de_lag += mj * (gi.u[a] - gj.u[a]) * share[a];
+        cuts.de_lag += mj * (f64::from(gi.u[a]) - f64::from(gj.u[a])) * share[a];
     }
     if open {
         let (drho, grad_v) = kinematic_terms::<D, K, CN>(kernel, i, j, xij, pass);
@@ -1222,8 +1258,9 @@ fn severed<const D: usize>(
 }
 
 /// The pair's terms in i's continuity and velocity gradient, as the pass adds them:
-/// (m_j v_ij · ∇̃_i W_ij, −V_j v_ij ⊗ ∇̃_i W_ij), ∇̃ = B_i ∇ in CN-SPH, whose continuity term is
-/// V_j v_ij · ∇̃_i W_ij (times ρ_i with the rest of the sum).
+/// (m_j w_ij · ∇̃_i W_ij, −V_j w_ij ⊗ ∇̃_i W_ij) with w = v + dv the velocity at the step's
+/// middle, ∇̃ = B_i ∇ in CN-SPH, whose continuity term is V_j w_ij · ∇̃_i W_ij (times ρ_i with
+/// the rest of the sum).
 fn kinematic_terms<const D: usize, K: Kernel, const CN: bool>(
     kernel: K,
     i: usize,
@@ -1235,7 +1272,8 @@ fn kinematic_terms<const D: usize, K: Kernel, const CN: bool>(
     let r = dot(xij, xij).sqrt();
     let gf = kernel.grad_factor::<D>(r, 0.5 * (gi.h + gj.h));
     let grad: [f64; D] = std::array::from_fn(|k| xij[k] * gf);
-    let vij: [f64; D] = std::array::from_fn(|k| gi.v[k] - gj.v[k]);
+    let vij: [f64; D] =
+        std::array::from_fn(|k| gi.v[k] - gj.v[k] + (f64::from(gi.dv[k]) - f64::from(gj.dv[k])));
     // CN-SPH: on the plain ∇W, as the pass's sums (B_i comes at the end, `finish_corrected`);
     // its density rate follows from L.
     let drho = if CN { 0.0 } else { gj.m * dot(&vij, &grad) };

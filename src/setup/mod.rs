@@ -120,6 +120,7 @@ pub fn build<const D: usize>(case: &Case) -> Result<(Particles<D>, Model<D>)> {
         pairs,
         alpha: s.viscosity_alpha,
         beta: s.viscosity_beta,
+        limiter: s.viscosity_limiter,
         gravity: from3::<D>(s.gravity),
         cfl: s.cfl(),
         smoothing_ratio: s.smoothing_ratio,

@@ -659,9 +659,10 @@ fn half_pulse(rows: &[Row]) -> Result<(f64, f64, f64, f64, f64)> {
 
 /// Bars at ±10 m/s (`examples/bars_contact.toml`, to 40 µs), L/Δp = 100 (and 200): they part
 /// at ∓10 m/s within 5 %, the pulse lasts 2L/c within 5 % at half its plateau, is never
-/// tensile and exactly zero once they part; energy within 1 %. CN-SPH's bars part 5.3 % slow
-/// at L/Δp = 100 (∓9.47 m/s) and within 5 % from L/Δp = 200: its speed is reported at 100,
-/// held from 200, and held to improve with refinement.
+/// tensile and exactly zero once they part; energy within 1 %, in both formulations, and the
+/// speed's error held to shrink with refinement. Until the viscosity's limiter and the mid-step
+/// material update (2026-11-28), CN-SPH's bars parted 5.3 % slow at L/Δp = 100 (∓9.47 m/s)
+/// and were held only from L/Δp = 200.
 pub fn slow_bars(fine: bool) -> Result<Outcome> {
     let mut base = example("bars_contact")?;
     base.simulation.end_time = 40.0e-6;
@@ -682,17 +683,11 @@ pub fn slow_bars(fine: bool) -> Result<Outcome> {
             let s = setting(&case, &format!("L/Δp = {per:.0}"));
             let source = "momentum exchange of equal bars: they swap velocities";
             let end = rows[rows.len() - 1].v.clone();
-            let held = f == Formulation::Conventional || per >= 199.0;
             for (what, got, want) in [
                 ("left bar's speed after", end[0][0], -v),
                 ("right bar's speed after", end[1][0], v),
             ] {
-                let check = Check::new(what, &s, got, "m/s", source);
-                checks.push(if held {
-                    check.within(want, 0.05)
-                } else {
-                    check.reported(want)
-                });
+                checks.push(Check::new(what, &s, got, "m/s", source).within(want, 0.05));
             }
             let error = (end[1][0] / v - 1.0).abs();
             converges(
