@@ -50,7 +50,7 @@ use crate::physics::{Model, Rates};
 use crate::tensor::{
     equivalent_strain_rate, max_principal, max_principal_bound, out_of_plane, von_mises,
 };
-use nalgebra::SVector;
+use nalgebra::{SMatrix, SVector};
 use rayon::prelude::*;
 
 /// Predict v^n = v^{n−½} + ½ Δt_{n−1} a^{n−1} for the real particles (prescribed bodies keep
@@ -241,7 +241,6 @@ pub fn advance<const D: usize>(
                 *rho = next_density(mat, *rho, rates.particles[i].drho * dt, *e, *dmg >= 1.0);
                 let p_eos = mat.eos.pressure(*rho, *e);
                 let grad_v = &rates.particles[i].grad_v;
-                *sr = ((grad_v + grad_v.transpose()) * 0.5).cast::<f32>();
                 let rate = equivalent_strain_rate(grad_v);
                 let mut d_eps = 0.0;
                 if mat.strength.reference_shear_modulus() > 0.0 {
@@ -260,6 +259,14 @@ pub fn advance<const D: usize>(
                     // yield surface: σ_eq = Y).
                     *w_p += von_mises(s) * d / *rho;
                 }
+                // What the viscosity's limiter reads of the particle's flow: its strain rate,
+                // or none once it has flowed plastically, so that its pairs keep the plain
+                // viscosity (`physics::viscosity::limited`, "Elastic material only").
+                *sr = if *eps_p > 0.0 {
+                    SMatrix::<f32, D, D>::zeros()
+                } else {
+                    ((grad_v + grad_v.transpose()) * 0.5).cast::<f32>()
+                };
                 // Most particles at most steps grow no damage: they are told by a bound of σ1,
                 // before the eigenvalue and the temperature are computed; and where only the
                 // plastic strain's models act, σ1 is left at its bound (see `DamageState`).

@@ -96,7 +96,8 @@ pub struct Particles<const D: usize> {
     /// Contact force on the particle (N), from the last force evaluation.
     pub contact_force: Vec<Vector<D>>,
     /// The strain rate D = sym L of the last step (1/s), in single precision: what the
-    /// artificial viscosity's limiter reads of the flow (`physics::viscosity`).
+    /// artificial viscosity's limiter reads of the flow (`physics::viscosity::limited`); zero
+    /// once the particle has flowed plastically (εp > 0), whose pairs keep the plain viscosity.
     pub strain_rate: Vec<SMatrix<f32, D, D>>,
     /// What the continuity equation and the velocity gradient add to [`Particles::v`] (m/s),
     /// in single precision: v + dv is the velocity at the middle of the coming step, v^{n+½},
@@ -267,12 +268,15 @@ pub fn from3<const D: usize>(a: [f64; 3]) -> Vector<D> {
 /// at 10⁷; CN-SPH adds B, (σ/ρ²)B and the correction pass's records, 1511 B at 10⁶ (since
 /// 2026-11-25 about 30 B less: the rate pass reads B from the correction's array instead of a
 /// copy; a CN-SPH cube of 10⁶ particles, 3 steps of `strike run`, peaked at 1.45 GB of resident
-/// memory against 1.48 GB before). In 2D 771 B and 963 B (CN-SPH) at 5·10⁵.
+/// memory against 1.48 GB before). In 2D 771 B and 963 B (CN-SPH) at 5·10⁵. Since 2026-11-28
+/// a particle also keeps its strain rate and its mid-step velocity in single precision (48 B
+/// in 3D, 24 B in 2D) and the neighbour record grew by 24 B: 1223 B measured at 10⁶ in 3D;
+/// the other three add the same fields' sizes to their measurements.
 pub fn estimated_bytes_per_particle(dimension: usize, corrected: bool) -> usize {
     match (dimension, corrected) {
-        (2, false) => 800,
-        (2, true) => 1000,
-        (_, false) => 1200,
-        (_, true) => 1550,
+        (2, false) => 850,
+        (2, true) => 1050,
+        (_, false) => 1270,
+        (_, true) => 1620,
     }
 }

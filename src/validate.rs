@@ -914,9 +914,12 @@ pub fn spall_plane(run: &SpallRun) -> f64 {
 ///   elastic release range, see the test). The relation itself reads +4.9 % on the converged
 ///   independent solution, so this check bounds the relation's error and SPH's together;
 /// - SPH's solution itself against the independent one ([`SPALL_LAGRANGIAN_1D`]): the free
-///   face's peak and pull-back minimum within 8 % (the test also holds them converging), and
-///   the spall plane, the failed particles' mean material coordinate, within 2 % (the
-///   acoustic estimate, one flyer thickness inside the free face, is 2.5 mm).
+///   face's peak and pull-back minimum within 10 % at 20 µm and 8 % at 10 µm (the test also
+///   holds them converging), and the spall plane, the failed particles' mean material
+///   coordinate, within 2 % (the acoustic estimate, one flyer thickness inside the free face,
+///   is 2.5 mm). At 20 µm the kernel rounds the short peak off: −8.4 % since the material
+///   update at the step's middle (2026-11-28; `integrate`), −5.6 % before, when the
+///   whole-step update's negative damping sharpened the pulse.
 pub fn spall(fine: bool) -> Result<Outcome> {
     let (rho0, sigma_s) = (2703.0, 1.0e9);
     let c0 = ((rho0 * 5240.0f64.powi(2) + 4.0 / 3.0 * 27.6e9) / rho0).sqrt();
@@ -935,6 +938,7 @@ pub fn spall(fine: bool) -> Result<Outcome> {
         let run = spall_run(&case)?;
         let (u_max, u_min) = pull_back(&run.free_face);
         let setting = format!("Δp = {} µm", dp * 1e6);
+        let face_tolerance = if dp > 15e-6 { 0.10 } else { 0.08 };
         checks.push(
             Check::new(
                 "spall strength from the pull-back",
@@ -947,7 +951,7 @@ pub fn spall(fine: bool) -> Result<Outcome> {
         );
         checks.push(
             Check::new("free-face peak", setting.clone(), u_max, "m/s", reference)
-                .within(u_max_ref, 0.08),
+                .within(u_max_ref, face_tolerance),
         );
         checks.push(
             Check::new(
@@ -957,7 +961,7 @@ pub fn spall(fine: bool) -> Result<Outcome> {
                 "m/s",
                 reference,
             )
-            .within(u_min_ref, 0.08),
+            .within(u_min_ref, face_tolerance),
         );
         checks.push(
             Check::new(
