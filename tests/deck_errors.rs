@@ -466,3 +466,24 @@ fn absurd_snapshot_interval_is_refused() {
     let deck = format!("{GOOD}\n[output]\nsnapshot_interval = 1.0e-11\n");
     assert!(parse(&deck, "ok.toml").is_ok());
 }
+
+/// The viscosity's limiter is a fraction of the sound speed in [0, 1]; a negative one, or a
+/// typo in the table's keys, is named with its line.
+#[test]
+fn viscosity_limiter_out_of_range() {
+    let deck = edit(
+        "end_time = 2.0e-7",
+        "end_time = 2.0e-7\nviscosity = { alpha = 1.0, beta = 2.0, limiter = -0.1 }",
+    );
+    let (message, help) = deck_error(&deck, "simulation.viscosity.limiter", 4);
+    assert!(message.contains("[0, 1]"), "{message}");
+    assert!(help.contains("default 0.003"), "{help}");
+    let (_, help) = deck_error(
+        &deck.replace("limiter = -0.1", "limitr = 0.01"),
+        "simulation.viscosity.limitr",
+        4,
+    );
+    assert!(help.contains("`limiter`"), "{help}");
+    let case = parse(&deck.replace("-0.1", "0.0"), "good.toml").unwrap();
+    assert_eq!(case.simulation.viscosity_limiter, 0.0);
+}
