@@ -365,18 +365,23 @@ fn johnson_cook_failure_in_plane_strain_compression() {
 /// (CN-SPH at the coarser). It breaks, and its cracks stay cracks:
 /// - its intact particles no longer join the two grips (pieces: linked within 1.5 Δp);
 /// - the failed particles lie on lines, not over areas: in the strip as it was built, a failed
-///   particle has on average fewer than 4 failed particles among its 8 nearest (a crack one or
-///   two particles wide has 2 to 5; a failed zone 8);
+///   particle has on average fewer than 5.25 failed particles among its 8 nearest: a band at
+///   most two particles wide (one wide reads 2; two wide 4 on the diagonal, 5 along the
+///   lattice; three wide 5.3 and 6; a failed zone 8);
 /// - at most 15 % of the strip has failed;
 /// - the two end pieces go with their grips, their mean velocity within 20 % of ∓10 m/s.
 ///
 /// How it breaks depends on the spacing, as a localisation does: across two straight cracks at
-/// Δp = 0.1 mm, by two crossing shear bands at 0.05 mm. Measured on 2026-11-27 (failed of the
-/// strip; failed of 8 nearest; the end pieces' speeds): conventional SPH 16 of 300, 1.75,
-/// ∓10.01 m/s at 0.1 mm and 98 of 1200, 3.71, −9.40 / +9.60 m/s at 0.05 mm; CN-SPH 24 of 300,
-/// 2.17, ∓10.05 m/s and 99 of 1200, 6.18, −11.40 / +10.76 m/s (116 and 6.40 before CN-SPH's
-/// energy split changed, the same day). CN-SPH's crack at 0.05 mm is
-/// a band 3 to 4 particles wide (README, Not yet), and CN-SPH runs here at 0.1 mm only. Before 2026-11-27 the cracks' intact
+/// Δp = 0.1 mm, by crossing shear bands two particles wide at 0.05 mm. Measured on 2026-11-28,
+/// with the material update at the step's middle (failed of the strip; failed of 8 nearest;
+/// the end pieces' speeds): conventional SPH 16 of 300, 1.75, ∓10.03 m/s at 0.1 mm and 112 of
+/// 1200, 4.95, −9.00 / +9.59 m/s at 0.05 mm; CN-SPH 28 of 300, 1.86, ∓10.04 m/s and, by hand,
+/// 81 of 1200, 4.25, −8.74 / +9.76 m/s. The count at 0.05 mm is a property of where the bands
+/// cross and branch more than of their width: the same deck read 3.71 (98 failed) with the
+/// whole-step update of 2026-11-27, and 3.1 to 5.5 with variants of the update (its
+/// extrapolation off for failed or for plastic particles, the viscosity's limiter off), every
+/// one of them the same two-wide bands; CN-SPH read 6.18 (99 failed), a band 3 to 4 wide,
+/// before. CN-SPH runs here at 0.1 mm only, for CI's time. Before 2026-11-27 the cracks' intact
 /// neighbours read their opening as their own expansion (continuity) and strain (velocity
 /// gradient), went into 2–4 GPa of tension and failed in turn: 288 of the strip's 300
 /// particles failed at Δp = 0.1 mm (7.1 failed of 8 nearest), and the rubble flew apart
@@ -448,7 +453,7 @@ fn johnson_cook_failure_in_tension_leaves_a_crack() {
             left, right,
             "the grips are still joined through intact particles"
         );
-        assert!(near < 4.0, "a failed zone: {near} failed of 8 nearest");
+        assert!(near < 5.25, "a failed zone: {near} failed of 8 nearest");
         assert!(
             100 * failed <= 15 * strip.len(),
             "{failed} of {} failed",
