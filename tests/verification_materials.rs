@@ -26,6 +26,9 @@ fn two_resolutions(name: &str) -> [Case; 2] {
 /// gives back the spall strength set in the deck, σ_s = ½ ρ0 c Δu_fs, within 10 %, at two
 /// resolutions (`examples/spall.toml`: a thin flyer, so that the pulse is triangular).
 ///
+/// The same at σ_s = 0.6 GPa: the readback within 10 % and the spall plane within 2 % of the
+/// independent solution's at both resolutions, its pull-back minimum converging.
+///
 /// The wave speed of the acoustic relation is that of the release that carries the tension:
 /// here the elastic one, c_L = √((K0 + 4G/3)/ρ0) = 6409 m/s, because the tension at the spall
 /// plane is the incident pulse's stress decrement, and a decrement of 1 GPa lies inside the
@@ -99,6 +102,50 @@ fn flyer_plate_spall_gives_back_the_spall_strength() {
     assert!(
         error(fine.1, u_min_ref) < error(coarse.1, u_min_ref),
         "the pull-back minimum does not converge"
+    );
+    // A weaker spall: σ_s = 0.6 GPa. The independent solution at 1 µm cells
+    // (`python3 examples/spall_lagrangian_1d.py --cells-um 1 --strengths-gpa 0.6`): pull-back
+    // minimum 321.4 m/s, spall plane 2.4671 mm, and the acoustic readback itself −6.1 %.
+    // Measured 2026-11-28: readback −4.6 / −2.6 %, minimum 287.9 / 302.0 m/s, plane 2.423 /
+    // 2.473 mm at 20 / 10 µm (−11.5 / −14.3 % readback before the material update at the
+    // step's middle). At 1.5 GPa the readback is −10.6 / −13.0 %, as the independent
+    // solution's −16.9 / −11.5 % at the same cell sizes: held nowhere (README, Not yet).
+    let (weak, u_min_weak, plane_weak) = (0.6e9, 321.4, 2.4671e-3);
+    let text = std::fs::read_to_string(format!(
+        "{}/examples/spall.toml",
+        env!("CARGO_MANIFEST_DIR")
+    ))
+    .unwrap();
+    let deck = text.replace("spall_strength = 1.0e9", "spall_strength = 0.6e9");
+    assert_ne!(deck, text, "the deck's spall strength moved");
+    let mut minima = Vec::new();
+    for refine in [1.0, 0.5] {
+        let mut case = strike::deck::parse(&deck, "spall.toml").unwrap();
+        for b in &mut case.bodies {
+            b.spacing *= refine;
+        }
+        let run = spall_run(&case).unwrap();
+        let (u_max, u_min) = pull_back(&run.free_face);
+        let sigma = 0.5 * rho0 * c0 * (u_max - u_min);
+        let plane = spall_plane(&run);
+        println!(
+            "spall at 0.6 GPa, Δp = {:.1e} m: {u_max:.1} → {u_min:.1} m/s, ½ ρ0 c0 Δu = {:.3} GPa ({:+.2} %), plane {:.4} mm ({:+.2} %)",
+            case.bodies[1].spacing,
+            sigma * 1e-9,
+            100.0 * (sigma / weak - 1.0),
+            plane * 1e3,
+            100.0 * (plane / plane_weak - 1.0)
+        );
+        assert!(
+            (sigma / weak - 1.0).abs() < 0.10,
+            "0.6 GPa read back as {sigma:.3e}"
+        );
+        assert!(error(plane, plane_weak) < 0.02, "0.6 GPa: plane at {plane}");
+        minima.push(u_min);
+    }
+    assert!(
+        error(minima[1], u_min_weak) < error(minima[0], u_min_weak),
+        "0.6 GPa: the pull-back minimum does not converge: {minima:?}"
     );
     // Without damage the target holds the tension and the free face falls back to rest.
     let mut intact = load("spall");
