@@ -35,8 +35,12 @@
 //! to 10× their energy within 20 µs. One pass cannot know v^{n+½}, since it computes the
 //! step's accelerations, so continuity and the velocity gradient take it extrapolated from the
 //! last two, w = v + dv = v^{n−½} + Δt (2aⁿ⁻¹ − aⁿ⁻²) (`Particles::dv`, carried in the pass's
-//! neighbour record in single precision): its amplification stays at or below 1 up to ωΔt ≈
-//! 0.85 and damps only the shortest waves. The forces, the viscosity, the contact and the
+//! neighbour record in single precision): for a single oscillator (s' = w, a = −ω² s) its
+//! amplification per step stays at or below 1 up to ωΔt ≈ 0.71 (0.9996 at 0.3, 0.97 at 0.5),
+//! so it damps only the shortest waves; extrapolating aⁿ⁻¹ alone (dv = ½ Δt aⁿ⁻¹) gives
+//! 1.005 at 0.3, a minmod-limited slope lets the oscillation grow at 0.5, and with either the
+//! viscosity-free bar below blew up (tried 2026-11-28, against the tension strip's failed
+//! bands: `tests/verification_materials.rs`). The forces, the viscosity, the contact and the
 //! energy equation keep v, so that the energy exchange stays second order as above (with w
 //! there too, the lagged energy correction is first order: 20 % of the energy of an elastic
 //! impact lost). An elastic bar with no viscosity at all keeps its energy within 1 % over 40 µs
