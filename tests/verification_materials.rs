@@ -50,13 +50,17 @@ fn flyer_plate_spall_gives_back_the_spall_strength() {
     let (rho0, sigma_s) = (2703.0, 1.0e9);
     let c0 = ((rho0 * 5240.0f64.powi(2) + 4.0 / 3.0 * 27.6e9) / rho0).sqrt();
     let (u_max_ref, u_min_ref, plane_ref) = SPALL_LAGRANGIAN_1D;
+    // The free face's peak and minimum, the strength they read back, the spall plane.
+    let read = |case: &Case| {
+        let run = spall_run(case).unwrap();
+        let (u_max, u_min) = pull_back(&run.free_face);
+        let plane = spall_plane(&run);
+        (u_max, u_min, 0.5 * rho0 * c0 * (u_max - u_min), plane, run)
+    };
     let mut results = Vec::new();
     for case in two_resolutions("spall") {
         let dp = case.bodies[1].spacing;
-        let run = spall_run(&case).unwrap();
-        let (u_max, u_min) = pull_back(&run.free_face);
-        let sigma = 0.5 * rho0 * c0 * (u_max - u_min);
-        let plane = spall_plane(&run);
+        let (u_max, u_min, sigma, plane, run) = read(&case);
         println!(
             "spall, Δp = {dp:.1e} m: u_fs max {u_max:.1} m/s ({:+.2} %), pull-back to {u_min:.1} m/s ({:+.2} %), ½ ρ0 c0 Δu = {:.3} GPa (set {:.3}), {:+.2} %; {} failed particles, spall plane at {:.4} mm ({:+.2} %); momentum {:.1e}",
             100.0 * (u_max / u_max_ref - 1.0),
@@ -124,10 +128,7 @@ fn flyer_plate_spall_gives_back_the_spall_strength() {
         for b in &mut case.bodies {
             b.spacing *= refine;
         }
-        let run = spall_run(&case).unwrap();
-        let (u_max, u_min) = pull_back(&run.free_face);
-        let sigma = 0.5 * rho0 * c0 * (u_max - u_min);
-        let plane = spall_plane(&run);
+        let (u_max, u_min, sigma, plane, _) = read(&case);
         println!(
             "spall at 0.6 GPa, Δp = {:.1e} m: {u_max:.1} → {u_min:.1} m/s, ½ ρ0 c0 Δu = {:.3} GPa ({:+.2} %), plane {:.4} mm ({:+.2} %)",
             case.bodies[1].spacing,
