@@ -38,13 +38,14 @@ fn two_resolutions(name: &str) -> [Case; 2] {
 /// SPH's own solution is held against an independent one of the same deck,
 /// `examples/spall_lagrangian_1d.py` converged at 1 µm cells (`SPALL_LAGRANGIAN_1D`): the free
 /// face's peak and pull-back minimum within 10 % at 20 µm and 8 % at 10 µm, and closer at the
-/// finer spacing (the kernel rounds off the short peak: 354 / 377 m/s at 20 / 10 µm against
+/// finer spacing (the kernel rounds off the short peak: 354 / 370 m/s at 20 / 10 µm against
 /// 386.4; 365 / 374, and 384 at 5 µm, before the material update at the step's middle of
-/// 2026-11-28, whose absence sharpened the pulse), and the spall plane within 2 %. The plane is where the failed particles started (their
-/// material coordinate): where they are at the end is no measure of it, since the spalled
-/// layers open and fly apart (+3.5 / +5.0 % at 20 / 10 µm by their current places, the
-/// independent solution's own +3.4–3.8 %). The same run with damage off shows the diagnostic
-/// sees the difference: the free face then falls back towards rest.
+/// 2026-11-28, whose absence sharpened the pulse), and the spall plane within 2 %. The plane
+/// is where the failed particles started (their material coordinate): where they are at the
+/// end is no measure of it, since the spalled layers open and fly apart (+3.5 / +5.0 % at
+/// 20 / 10 µm by their current places, the independent solution's own +3.4–3.8 %). The same
+/// run with damage off shows the diagnostic sees the difference: the free face then falls
+/// back towards rest.
 #[test]
 fn flyer_plate_spall_gives_back_the_spall_strength() {
     let (rho0, sigma_s) = (2703.0, 1.0e9);
