@@ -210,6 +210,11 @@ impl NeighborList {
         self.owned = Some(owned);
     }
 
+    /// Whether real particle `i` has its list here (an MPI rank builds only its share's).
+    pub fn listed(&self, i: usize) -> bool {
+        i < self.n_lists && self.chunk_owned(i >> CHUNK_SHIFT)
+    }
+
     /// Whether the lists of chunk `ci` are built.
     fn chunk_owned(&self, ci: usize) -> bool {
         self.owned
