@@ -1140,7 +1140,8 @@ impl<const D: usize> Default for Cut<D> {
 /// list (in `strike bench`'s shocked steel cubes, 12 % of their particles failed, scanning
 /// the list for every pair made Johnson–Cook with damage cost 70 % more a step than von
 /// Mises). Kept out of the pass's own frame: with the candidates in an array there (of 32
-/// entries, or of one), the conventional cubes, where nothing fails, ran 17 % slower.
+/// entries, or even of one), the conventional cubes, where nothing fails, ran about 15 %
+/// slower.
 #[derive(Debug, Default, Clone)]
 struct CrackLists {
     /// ends[i]: where particle i's candidates end in `items` (they start at ends[i − 1]).
