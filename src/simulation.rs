@@ -428,7 +428,6 @@ impl<const D: usize> Simulation<D> {
             let (nl, model) = (&self.neighbors, &self.model);
             let surfaces = cn.then_some(colour::Surfaces {
                 lambda: &self.lambda,
-                b: &self.corr,
             });
             match self.kernel {
                 KernelKind::CubicSpline => physics::colour_states(

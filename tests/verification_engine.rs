@@ -45,9 +45,27 @@ fn corrected_gradients_reproduce_linear_fields() {
 /// every particle away from the blocks' edges, on a regular and on a perturbed lattice, with
 /// either law; in conventional SPH it strays by more than 3° on the perturbed lattice; the net
 /// contact force vanishes (`strike validate --case contact_direction`).
+/// The same case checks that CN-SPH's facing layers of a compressed contact feel
+/// conventional SPH's net force; here, that the check sees the face of a B taken over the own
+/// body alone, whose layers are off by more than 0.3 of a layer's traction.
 #[test]
 fn cn_contact_acts_along_the_surface_normal() {
     validated(strike::validate::blocks::contact_direction(false));
+    use strike::case::Formulation;
+    use strike::physics::correction::Counts;
+    use strike::validate::blocks::face_layers;
+    for strain in [0.05, 0.35] {
+        let conventional =
+            face_layers(Formulation::Conventional, strain, 0.1, Counts::Not).unwrap();
+        let own_body = face_layers(Formulation::Corrected, strain, 0.1, Counts::Not).unwrap();
+        let worst = (0..2)
+            .map(|k| (own_body[k] - conventional[k]).abs())
+            .fold(0.0, f64::max);
+        assert!(
+            worst > 0.3,
+            "strain {strain}: {own_body:?} against {conventional:?}"
+        );
+    }
 }
 
 /// Elastic wave in uniaxial strain (`strike validate --case elastic_wave`): the front moves at

@@ -204,8 +204,9 @@ pub fn colour_states<const D: usize, K: Kernel>(
 }
 
 /// CN-SPH's gradient correction of the real particles in `owned` (`out[i]`, see
-/// [`correction`]), over its own body and the bodies welded to it; returns how many of them
-/// kept the uncorrected gradient.
+/// [`correction`]), over its own body and the bodies welded to it, and B at a face in contact
+/// through the colour law over the facing body too ([`correction::Counts::Facing`]); returns
+/// how many of them kept the uncorrected gradient.
 pub fn corrections<const D: usize, K: Kernel>(
     kernel: K,
     p: &Particles<D>,
@@ -214,25 +215,36 @@ pub fn corrections<const D: usize, K: Kernel>(
     owned: &Range<usize>,
     out: &mut Vec<correction::Correction<D>>,
 ) -> usize {
+    use correction::Counts;
     // A wall's image counts as the body's own while it and i are pressed together, as a
     // symmetry plane's ghost does; once the face lifts off, the rate pass leaves the image out
     // ([`pressed`], on the same records), and so does B: B's moments are then the free
     // surface's, and the corrected gradient stays exact for a linear field there.
     let ratio = model.smoothing_ratio;
-    let joined = |i: usize, j: usize| {
+    let counts = |i: usize, j: usize| {
         let (a, b) = (p.body[i], p.body[j]);
-        a == b
-            || match model.pairs.rule(a, b) {
-                PairRule::Conserve => true,
-                PairRule::Wall => {
-                    let (gi, gj) = (Gather::of(p, i, ratio), Gather::of(p, j, ratio));
-                    let xij: [f64; D] = std::array::from_fn(|k| gi.x[k] - gj.x[k]);
-                    pressed(&gi, &gj, &xij)
+        if a == b {
+            return Counts::Body;
+        }
+        match model.pairs.rule(a, b) {
+            PairRule::Conserve => Counts::Body,
+            PairRule::Wall => {
+                let (gi, gj) = (Gather::of(p, i, ratio), Gather::of(p, j, ratio));
+                let xij: [f64; D] = std::array::from_fn(|k| gi.x[k] - gj.x[k]);
+                if pressed(&gi, &gj, &xij) {
+                    Counts::Body
+                } else {
+                    Counts::Not
                 }
-                PairRule::Contact(_) => false,
             }
+            // The colour law's traction stands in for the facing body's missing neighbours
+            // (see `Counts::Facing`); the paper's form keeps the paper's CN-SPH, W = 0
+            // across bodies in B too.
+            PairRule::Contact(c) if c.law == ContactLaw::Colour => Counts::Facing,
+            PairRule::Contact(_) => Counts::Not,
+        }
     };
-    correction::corrections(kernel, p, nl, joined, owned, out)
+    correction::corrections(kernel, p, nl, counts, owned, out)
 }
 
 /// Rates of change and per-particle diagnostics of one real particle, from one pass.
@@ -1685,7 +1697,11 @@ type = "welded"
         let bodies = p.body.clone();
         let joined = |i: usize, j: usize| {
             let (a, b) = (bodies[i], bodies[j]);
-            a == b || matches!(model.pairs.rule(a, b), PairRule::Conserve)
+            match model.pairs.rule(a, b) {
+                _ if a == b => correction::Counts::Body,
+                PairRule::Conserve => correction::Counts::Body,
+                _ => correction::Counts::Facing,
+            }
         };
         let (mut cw, mut cp) = (Vec::new(), Vec::new());
         correction::corrections_on(CubicSpline, &p, &nl, joined, &all, &mut cw, true);
@@ -1839,11 +1855,24 @@ shape = { type = "rectangle", min = [0.0, 0.0], max = [8.0e-3, 6.0e-3] }
                 CubicSpline,
                 &p,
                 &nl,
-                |i, j| body[i] == body[j],
+                |i, j| {
+                    if body[i] == body[j] {
+                        correction::Counts::Body
+                    } else {
+                        correction::Counts::Not
+                    }
+                },
                 &all,
                 &mut alone,
             );
-            correction::corrections(CubicSpline, &p, &nl, |_, _| true, &all, &mut mirrored);
+            correction::corrections(
+                CubicSpline,
+                &p,
+                &nl,
+                |_, _| correction::Counts::Body,
+                &all,
+                &mut mirrored,
+            );
             let want = if lifting { &alone } else { &mirrored };
             for &i in &face {
                 assert_ne!(alone[i].b, mirrored[i].b, "particle {i}");

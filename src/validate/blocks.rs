@@ -10,8 +10,8 @@ use crate::error::Result;
 use crate::kernel::{moments, CubicSpline, Kernel, WendlandC2};
 use crate::neighbors::NeighborList;
 use crate::particles::{Particles, Tensor, Vector};
-use crate::physics::correction::{corrections, same_body, shepard};
-use crate::physics::{colour_states, compute_rates, Rates};
+use crate::physics::correction::{self, corrections, same_body, shepard, Counts};
+use crate::physics::{colour_states, compute_rates, PairRule, Rates};
 
 /// A fixed pseudo-random sequence uniform on [−½, ½) from `seed` (Knuth's MMIX linear
 /// congruential generator, its top 53 bits): perturbed lattices that are the same on every run.
@@ -141,8 +141,39 @@ pub fn consistency(_fine: bool) -> Result<Outcome> {
 /// contact law. In CN-SPH the force at every particle away from the blocks' edges is along the
 /// surface normal within 1°; in conventional SPH it strays by more than 3° on the perturbed
 /// lattice; the net contact force vanishes to 1e-12 of the sum of its magnitudes in both.
+///
+/// And the balance of a face in contact ([`face_layers`]): CN-SPH's two facing layers feel the
+/// net force that conventional SPH's do, within 0.05 of a layer's traction, at 5–35 % strain.
 pub fn contact_direction(_fine: bool) -> Result<Outcome> {
     let mut checks = Vec::new();
+    for strain in [0.05, 0.2, 0.35] {
+        for jitter in [0.0, 0.1] {
+            let conventional = face_layers(Formulation::Conventional, strain, jitter, Counts::Not)?;
+            let corrected = face_layers(Formulation::Corrected, strain, jitter, Counts::Facing)?;
+            let worst = (0..2)
+                .map(|k| (corrected[k] - conventional[k]).abs())
+                .fold(0.0, f64::max);
+            let s = format!(
+                "CN-SPH against conventional SPH, strain {strain}, lattice {}",
+                if jitter > 0.0 {
+                    "perturbed ±0.1 Δp"
+                } else {
+                    "regular"
+                }
+            );
+            checks.push(
+                Check::new(
+                    "face layers' net force, largest difference",
+                    &s,
+                    worst,
+                    "p A",
+                    "the contact's traction meets the face as it does in conventional SPH \
+                     (physics::correction::Counts::Facing)",
+                )
+                .at_most(0.05),
+            );
+        }
+    }
     for law in ["colour", "paper"] {
         for jitter in [0.0, 0.1] {
             for f in [Formulation::Corrected, Formulation::Conventional] {
@@ -328,10 +359,7 @@ law = "{law}"
         b = c.iter().map(|c| c.b).collect();
         lambda = c.iter().map(|c| c.lambda_min).collect();
     }
-    let surfaces = cn.then_some(colour::Surfaces {
-        lambda: &lambda,
-        b: &b,
-    });
+    let surfaces = cn.then_some(colour::Surfaces { lambda: &lambda });
     let mut states = Vec::new();
     colour_states(
         CubicSpline,
@@ -353,4 +381,104 @@ law = "{law}"
     );
     let f = rates.particles.iter().map(|r| r.contact_force).collect();
     Ok((p, f))
+}
+
+/// The net force along the normal on the two facing layers of a flat contact in a uniformly
+/// compressed state, per particle, in units of the traction a layer carries (p Δp^(D−1)):
+/// two 3D blocks of a fluid (linear EOS, K = 76 GPa) touching at the natural spacing, then
+/// compressed together along the normal by `strain` (the facing gap with them), every particle
+/// at the pressure of its density, the facing layers perturbed within their planes by up to
+/// ±`jitter` Δp. In CN-SPH `facing` says how the other body's particles count in B
+/// ([`Counts::Facing`], as strike has it, or [`Counts::Not`], B over the own body alone).
+/// Averaged over the lower block's particles two supports away from its sides; positive
+/// towards the other body.
+pub fn face_layers(
+    formulation: Formulation,
+    strain: f64,
+    jitter: f64,
+    facing: Counts,
+) -> Result<[f64; 2]> {
+    let deck = r#"
+[simulation]
+dimension = 3
+end_time = 1.0
+[materials.fluid]
+density = 2700.0
+eos = { type = "linear", bulk_modulus = 76.0e9 }
+strength = { type = "hydrodynamic" }
+[[body]]
+name = "a"
+material = "fluid"
+spacing = 1.0e-3
+shape = { type = "box", min = [0.0, 0.0, 0.0], max = [14.0e-3, 14.0e-3, 6.0e-3] }
+[[body]]
+name = "b"
+material = "fluid"
+spacing = 1.0e-3
+shape = { type = "box", min = [0.0, 0.0, 6.0e-3], max = [14.0e-3, 14.0e-3, 12.0e-3] }
+[[interaction]]
+bodies = ["a", "b"]
+type = "contact"
+"#;
+    let case = crate::deck::parse(deck, "face_layers.toml")?;
+    let (mut p, mut model) = crate::setup::build::<3>(&case)?;
+    model.formulation = formulation;
+    let (dp, face) = (1.0e-3, 6.0e-3);
+    let rho = case.materials[0].density / (1.0 - strain);
+    let pressure = model.materials[0].pressure(rho, 0.0);
+    let mut rnd = uniform(4242u64);
+    for i in 0..p.n_real {
+        p.x[i][2] = face + (p.x[i][2] - face) * (1.0 - strain);
+        for k in 0..2 {
+            p.x[i][k] += 2.0 * jitter * dp * rnd();
+        }
+        p.rho[i] = rho;
+        p.p[i] = pressure;
+    }
+    let mut nl = NeighborList::default();
+    nl.build(&p.x, &p.h, p.n_real, 0.0);
+    nl.classify(&p.body, false);
+    let all = 0..p.n_real;
+    let (mut c, mut b, mut lambda) = (Vec::new(), Vec::new(), Vec::new());
+    let cn = formulation == Formulation::Corrected;
+    if cn {
+        let counts = |i: usize, j: usize| {
+            let (bi, bj) = (p.body[i], p.body[j]);
+            match model.pairs.rule(bi, bj) {
+                _ if bi == bj => Counts::Body,
+                PairRule::Contact(_) => facing,
+                _ => Counts::Not,
+            }
+        };
+        correction::corrections(CubicSpline, &p, &nl, counts, &all, &mut c);
+        b = c.iter().map(|c| c.b).collect();
+        lambda = c.iter().map(|c| c.lambda_min).collect();
+    }
+    let surfaces = cn.then_some(colour::Surfaces { lambda: &lambda });
+    let mut states = Vec::new();
+    colour_states(CubicSpline, &p, &nl, &model, (surfaces, &all), &mut states);
+    let mut rates = Rates::default();
+    compute_rates(
+        CubicSpline,
+        &p,
+        &nl,
+        &model,
+        (&states, &b, &[]),
+        &all,
+        &mut rates,
+    );
+    let traction = pressure * dp * dp;
+    let inner = |x: f64| (5.0e-3..9.0e-3).contains(&x);
+    let (mut sum, mut n) = ([0.0; 2], [0usize; 2]);
+    for i in 0..p.n_real {
+        if p.body[i] != 0 || !inner(p.x[i][0]) || !inner(p.x[i][1]) {
+            continue;
+        }
+        let layer = ((face - p.x[i][2]) / (dp * (1.0 - strain))).floor() as usize;
+        if layer < 2 {
+            sum[layer] += p.m[i] * rates.particles[i].acc[2] / traction;
+            n[layer] += 1;
+        }
+    }
+    Ok([0, 1].map(|k| sum[k] / n[k].max(1) as f64))
 }
