@@ -45,6 +45,7 @@ fn corrected_gradients_reproduce_linear_fields() {
 /// every particle away from the blocks' edges, on a regular and on a perturbed lattice, with
 /// either law; in conventional SPH it strays by more than 3° on the perturbed lattice; the net
 /// contact force vanishes (`strike validate --case contact_direction`).
+///
 /// The same case checks that CN-SPH's facing layers of a compressed contact feel
 /// conventional SPH's net force; here, that the check sees the face of a B taken over the own
 /// body alone, whose layers are off by more than 0.3 of a layer's traction.

@@ -478,8 +478,9 @@ const BATCH: usize = 64;
 const SYM: [(usize, usize); 6] = [(0, 0), (1, 1), (2, 2), (0, 1), (0, 2), (1, 2)];
 
 /// The Shepard sum S_i = Σ_j V_j W_ij (i itself included) over the neighbours j that
-/// `counts(i, j)` counts as i's body ([`Counts::Body`]): the denominator of the paper's shape function N_ij = V_j W_ij / S_i, which
-/// interpolates a constant exactly, at a surface too (see the module doc).
+/// `counts(i, j)` counts as i's body ([`Counts::Body`]): the denominator of the paper's shape
+/// function N_ij = V_j W_ij / S_i, which interpolates a constant exactly, at a surface too
+/// (see the module doc).
 pub fn shepard<const D: usize, K: Kernel>(
     kernel: K,
     p: &Particles<D>,
