@@ -10,8 +10,8 @@ use crate::error::Result;
 use crate::kernel::{moments, CubicSpline, Kernel, WendlandC2};
 use crate::neighbors::NeighborList;
 use crate::particles::{Particles, Tensor, Vector};
-use crate::physics::correction::{self, corrections, same_body, shepard, Counts};
-use crate::physics::{colour_states, compute_rates, PairRule, Rates};
+use crate::physics::correction::{self, corrections, same_body, shepard, Correction, Counts};
+use crate::physics::{colour_states, compute_rates, Model, PairRule, Rates};
 
 /// A fixed pseudo-random sequence uniform on [−½, ½) from `seed` (Knuth's MMIX linear
 /// congruential generator, its top 53 bits): perturbed lattices that are the same on every run.
@@ -352,33 +352,11 @@ law = "{law}"
     let mut nl = NeighborList::default();
     nl.build(&p.x, &p.h, p.n_real, 0.0);
     nl.classify(&p.body, false);
-    let (mut c, mut b, mut lambda) = (Vec::new(), Vec::new(), Vec::new());
-    let cn = formulation == Formulation::Corrected;
-    if cn {
+    let mut c = Vec::new();
+    if formulation == Formulation::Corrected {
         crate::physics::corrections(CubicSpline, &p, &nl, &model, &(0..p.n_real), &mut c);
-        b = c.iter().map(|c| c.b).collect();
-        lambda = c.iter().map(|c| c.lambda_min).collect();
     }
-    let surfaces = cn.then_some(colour::Surfaces { lambda: &lambda });
-    let mut states = Vec::new();
-    colour_states(
-        CubicSpline,
-        &p,
-        &nl,
-        &model,
-        (surfaces, &(0..p.n_real)),
-        &mut states,
-    );
-    let mut rates = Rates::default();
-    compute_rates(
-        CubicSpline,
-        &p,
-        &nl,
-        &model,
-        (&states, &b, &[]),
-        &(0..p.n_real),
-        &mut rates,
-    );
+    let rates = rates_of(&p, &nl, &model, &c);
     let f = rates.particles.iter().map(|r| r.contact_force).collect();
     Ok((p, f))
 }
@@ -439,9 +417,8 @@ type = "contact"
     nl.build(&p.x, &p.h, p.n_real, 0.0);
     nl.classify(&p.body, false);
     let all = 0..p.n_real;
-    let (mut c, mut b, mut lambda) = (Vec::new(), Vec::new(), Vec::new());
-    let cn = formulation == Formulation::Corrected;
-    if cn {
+    let mut c = Vec::new();
+    if formulation == Formulation::Corrected {
         let counts = |i: usize, j: usize| {
             let (bi, bj) = (p.body[i], p.body[j]);
             match model.pairs.rule(bi, bj) {
@@ -451,22 +428,8 @@ type = "contact"
             }
         };
         correction::corrections(CubicSpline, &p, &nl, counts, &all, &mut c);
-        b = c.iter().map(|c| c.b).collect();
-        lambda = c.iter().map(|c| c.lambda_min).collect();
     }
-    let surfaces = cn.then_some(colour::Surfaces { lambda: &lambda });
-    let mut states = Vec::new();
-    colour_states(CubicSpline, &p, &nl, &model, (surfaces, &all), &mut states);
-    let mut rates = Rates::default();
-    compute_rates(
-        CubicSpline,
-        &p,
-        &nl,
-        &model,
-        (&states, &b, &[]),
-        &all,
-        &mut rates,
-    );
+    let rates = rates_of(&p, &nl, &model, &c);
     let traction = pressure * dp * dp;
     let inner = |x: f64| (5.0e-3..9.0e-3).contains(&x);
     let (mut sum, mut n) = ([0.0; 2], [0usize; 2]);
@@ -481,4 +444,31 @@ type = "contact"
         }
     }
     Ok([0, 1].map(|k| sum[k] / n[k].max(1) as f64))
+}
+
+/// One rate pass over every particle (its colour states first), in CN-SPH with the
+/// corrections `c` (empty: conventional SPH).
+fn rates_of(
+    p: &Particles<3>,
+    nl: &NeighborList,
+    model: &Model<3>,
+    c: &[Correction<3>],
+) -> Rates<3> {
+    let all = 0..p.n_real;
+    let b: Vec<Tensor<3>> = c.iter().map(|c| c.b).collect();
+    let lambda: Vec<f64> = c.iter().map(|c| c.lambda_min).collect();
+    let surfaces = (!c.is_empty()).then_some(colour::Surfaces { lambda: &lambda });
+    let mut states = Vec::new();
+    colour_states(CubicSpline, p, nl, model, (surfaces, &all), &mut states);
+    let mut rates = Rates::default();
+    compute_rates(
+        CubicSpline,
+        p,
+        nl,
+        model,
+        (&states, &b, &[]),
+        &all,
+        &mut rates,
+    );
+    rates
 }
