@@ -238,15 +238,10 @@ fn correction<const D: usize, K: Kernel>(
     counts: &impl Fn(usize, usize) -> Counts,
 ) -> Correction<D> {
     let (body, facing, support) = if mixed {
-        let body = |j: usize| counts(i, j) == Counts::Body;
-        let facing = |j: usize| counts(i, j) == Counts::Facing;
-        (
-            moments::<D, K, true>(kernel, i, list, points, &body).0,
-            Some(moments::<D, K, true>(kernel, i, list, points, &facing).0),
-            None,
-        )
+        let [body, facing] = moments::<D, K, true>(kernel, i, list, points, counts).0;
+        (body, Some(facing), None)
     } else {
-        let (sums, mask) = moments::<D, K, false>(kernel, i, list, points, &|_| true);
+        let ([sums, _], mask) = moments::<D, K, false>(kernel, i, list, points, counts);
         (sums, None, (list.len() <= SUPPORT_ENTRIES).then_some(mask))
     };
     let a = tensor_of::<D>(&body);
@@ -270,12 +265,44 @@ fn correction<const D: usize, K: Kernel>(
 
 /// B = A⁻¹ where A inverts robustly (its smallest eigenvalue `lambda_min` at least
 /// [`LAMBDA_MIN`], every entry of the inverse finite); `None` where the uncorrected gradient is
-/// to be kept.
+/// to be kept. A is symmetric, and so is its inverse: adj(A)/det A from its distinct cofactors
+/// (six in 3D; nalgebra's general inverse cost 1.4 % of a CN-SPH step).
 pub fn invert<const D: usize>(a: &Tensor<D>, lambda_min: f64) -> Option<Tensor<D>> {
-    (lambda_min >= LAMBDA_MIN)
-        .then(|| a.try_inverse())
-        .flatten()
-        .filter(|b| b.iter().all(|x| x.is_finite()))
+    if lambda_min < LAMBDA_MIN {
+        return None;
+    }
+    let mut b = Tensor::<D>::zeros();
+    match D {
+        1 => b[(0, 0)] = 1.0 / a[(0, 0)],
+        2 => {
+            let inv_det = 1.0 / (a[(0, 0)] * a[(1, 1)] - a[(0, 1)] * a[(0, 1)]);
+            b[(0, 0)] = a[(1, 1)] * inv_det;
+            b[(1, 1)] = a[(0, 0)] * inv_det;
+            b[(0, 1)] = -a[(0, 1)] * inv_det;
+            b[(1, 0)] = b[(0, 1)];
+        }
+        _ => {
+            let (a00, a11, a22) = (a[(0, 0)], a[(1, 1)], a[(2, 2)]);
+            let (a01, a02, a12) = (a[(0, 1)], a[(0, 2)], a[(1, 2)]);
+            let c00 = a11 * a22 - a12 * a12;
+            let c01 = a02 * a12 - a01 * a22;
+            let c02 = a01 * a12 - a02 * a11;
+            let inv_det = 1.0 / (a00 * c00 + a01 * c01 + a02 * c02);
+            let cof = [
+                ((0, 0), c00),
+                ((1, 1), a00 * a22 - a02 * a02),
+                ((2, 2), a00 * a11 - a01 * a01),
+                ((0, 1), c01),
+                ((0, 2), c02),
+                ((1, 2), a01 * a02 - a00 * a12),
+            ];
+            for ((r, c), v) in cof {
+                b[(r, c)] = v * inv_det;
+                b[(c, r)] = b[(r, c)];
+            }
+        }
+    }
+    b.iter().all(|x| x.is_finite()).then_some(b)
 }
 
 /// A_i from [`moments`]' lanes, added up in lane order.
@@ -291,14 +318,17 @@ fn tensor_of<const D: usize>(sums: &[[f64; LANES]; 6]) -> Tensor<D> {
     a
 }
 
-/// −Σ_j V_j (1/r dW/dr) x_ij ⊗ x_ij over i's list (`CHECK`: only the neighbours j with
-/// `keep(j)`), its symmetric components per lane. The neighbours in i's support are
-/// queued first (the list also holds the skin's; filtered four entries at a time), then summed
-/// [`LANES`] at a time, the last chunk filled up with the padding record, as in the rate pass
-/// (sending the whole list through the lanes instead made the CN-SPH cubes of `strike bench`
-/// 25 % slower; queueing each neighbour's x_ij and r² from the filter, to spare the sums their
-/// gathers, 4 % slower than gathering again). Also returns which of the first [`SUPPORT_ENTRIES`]
-/// entries lie in the support (see [`Support`]).
+/// −Σ_j V_j (1/r dW/dr) x_ij ⊗ x_ij over i's list, its symmetric components per lane: over
+/// every neighbour (`CHECK` false; the sums in the first of the two), or (`CHECK`) over the
+/// neighbours j that `counts(i, j)` counts as [`Counts::Body`] in the first and as
+/// [`Counts::Facing`] in the second, from one walk of the list. The neighbours in i's support
+/// are queued first (the list also holds the skin's; filtered four entries at a time), each to
+/// its sum's queue, then summed [`LANES`] at a time, the last chunk filled up with the padding
+/// record, as in the rate pass (sending the whole list through the lanes instead made the
+/// CN-SPH cubes of `strike bench` 25 % slower; queueing each neighbour's x_ij and r² from the
+/// filter, to spare the sums their gathers, 4 % slower than gathering again; a walk of the
+/// list for each sum, at the particles beside another body, 3 % slower than one). Also returns
+/// which of the first [`SUPPORT_ENTRIES`] entries lie in the support (see [`Support`]).
 #[inline(always)]
 #[allow(clippy::needless_range_loop)] // lane loops read as the lanes' own
 fn moments<const D: usize, K: Kernel, const CHECK: bool>(
@@ -306,16 +336,47 @@ fn moments<const D: usize, K: Kernel, const CHECK: bool>(
     i: usize,
     list: &[u32],
     points: Points<D>,
-    keep: &impl Fn(usize) -> bool,
-) -> ([[f64; LANES]; 6], Support) {
+    counts: &impl Fn(usize, usize) -> Counts,
+) -> ([[[f64; LANES]; 6]; 2], Support) {
     let padding = (points.at.len() - 1) as u32;
     let pi = &points.at[i];
-    let mut sums = [[0.0; LANES]; 6];
+    let mut sums = [[[0.0; LANES]; 6]; 2];
     let mut mask: Support = [0; 2];
-    // Room for one more quad of entries past a full batch.
-    let mut queue = [padding; BATCH + LANES];
-    let mut queued = 0;
-    let joins = |j: u32| !CHECK || keep(j as usize);
+    // Room for one more quad of entries past a full batch, in each queue.
+    let mut queues = [[padding; BATCH + LANES]; 2];
+    let mut queued = [0; 2];
+    // Entry j, in the support or not, to the queue of the sum that counts it (if any).
+    let queue =
+        |queues: &mut [[u32; BATCH + LANES]; 2], queued: &mut [usize; 2], j: u32, inside: bool| {
+            if CHECK {
+                let c = if inside {
+                    counts(i, j as usize)
+                } else {
+                    Counts::Not
+                };
+                queues[0][queued[0]] = j;
+                queued[0] += (c == Counts::Body) as usize;
+                queues[1][queued[1]] = j;
+                queued[1] += (c == Counts::Facing) as usize;
+            } else {
+                queues[0][queued[0]] = j;
+                queued[0] += inside as usize;
+            }
+        };
+    let flush = |queues: &mut [[u32; BATCH + LANES]; 2],
+                 queued: &mut [usize; 2],
+                 sums: &mut [[[f64; LANES]; 6]; 2]| {
+        for k in 0..if CHECK { 2 } else { 1 } {
+            flush_batch::<D, K>(
+                kernel,
+                pi,
+                &mut queues[k],
+                &mut queued[k],
+                points,
+                &mut sums[k],
+            );
+        }
+    };
     // 64 entries at a time, each one's bit of the support kept in a register (the words past
     // the second, of lists longer than a `Support` covers, are dropped); within them, four
     // entries at a time.
@@ -327,27 +388,27 @@ fn moments<const D: usize, K: Kernel, const CHECK: bool>(
             let inside = in_support::<D, LANES>(pi, quad, points);
             for l in 0..LANES {
                 bits |= (inside[l] as u64) << (k + l);
-                queue[queued] = quad[l];
-                queued += (inside[l] & joins(quad[l])) as usize;
+                queue(&mut queues, &mut queued, quad[l], inside[l]);
             }
             k += LANES;
-            flush_batch::<D, K>(kernel, pi, &mut queue, &mut queued, points, &mut sums);
+            flush(&mut queues, &mut queued, &mut sums);
         }
         for &j in quads.remainder() {
             let inside = in_support::<D, 1>(pi, &[j], points)[0];
             bits |= (inside as u64) << k;
-            queue[queued] = j;
-            queued += (inside & joins(j)) as usize;
+            queue(&mut queues, &mut queued, j, inside);
             k += 1;
-            flush_batch::<D, K>(kernel, pi, &mut queue, &mut queued, points, &mut sums);
+            flush(&mut queues, &mut queued, &mut sums);
         }
         if let Some(m) = mask.get_mut(w) {
             *m = bits;
         }
     }
-    let used = queued.div_ceil(LANES) * LANES;
-    queue[queued..used].fill(padding);
-    sum_queue::<D, K>(kernel, pi, &queue[..used], points, &mut sums);
+    for k in 0..if CHECK { 2 } else { 1 } {
+        let used = queued[k].div_ceil(LANES) * LANES;
+        queues[k][queued[k]..used].fill(padding);
+        sum_queue::<D, K>(kernel, pi, &queues[k][..used], points, &mut sums[k]);
+    }
     (sums, mask)
 }
 
