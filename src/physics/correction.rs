@@ -327,7 +327,7 @@ fn tensor_of<const D: usize>(sums: &[[f64; LANES]; 6]) -> Tensor<D> {
 /// record, as in the rate pass (sending the whole list through the lanes instead made the
 /// CN-SPH cubes of `strike bench` 25 % slower; queueing each neighbour's x_ij and r² from the
 /// filter, to spare the sums their gathers, 4 % slower than gathering again; a walk of the
-/// list for each sum, at the particles beside another body, 3 % slower than one). Also returns
+/// list for each sum, at the particles beside another body, about 5 % slower than one). Also returns
 /// which of the first [`SUPPORT_ENTRIES`] entries lie in the support (see [`Support`]).
 #[inline(always)]
 #[allow(clippy::needless_range_loop)] // lane loops read as the lanes' own
@@ -345,7 +345,9 @@ fn moments<const D: usize, K: Kernel, const CHECK: bool>(
     // Room for one more quad of entries past a full batch, in each queue.
     let mut queues = [[padding; BATCH + LANES]; 2];
     let mut queued = [0; 2];
-    // Entry j, in the support or not, to the queue of the sum that counts it (if any).
+    // Entry j, in the support or not, to the queue of the sum that counts it (if any). The
+    // queueing and the flush as closures, which the compiler keeps out of line: as methods
+    // inlined into the walk the cubes ran 4 % slower, with the flush alone out of line 7 %.
     let queue =
         |queues: &mut [[u32; BATCH + LANES]; 2], queued: &mut [usize; 2], j: u32, inside: bool| {
             if CHECK {
