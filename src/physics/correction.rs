@@ -327,8 +327,9 @@ fn tensor_of<const D: usize>(sums: &[[f64; LANES]; 6]) -> Tensor<D> {
 /// record, as in the rate pass (sending the whole list through the lanes instead made the
 /// CN-SPH cubes of `strike bench` 25 % slower; queueing each neighbour's x_ij and r² from the
 /// filter, to spare the sums their gathers, 4 % slower than gathering again; a walk of the
-/// list for each sum, at the particles beside another body, about 5 % slower than one). Also returns
-/// which of the first [`SUPPORT_ENTRIES`] entries lie in the support (see [`Support`]).
+/// list for each sum, at the particles beside another body, about 5 % slower than one). Also
+/// returns which of the first [`SUPPORT_ENTRIES`] entries lie in the support (see
+/// [`Support`]).
 #[inline(always)]
 #[allow(clippy::needless_range_loop)] // lane loops read as the lanes' own
 fn moments<const D: usize, K: Kernel, const CHECK: bool>(
