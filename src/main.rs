@@ -250,7 +250,17 @@ fn main_inner(ranks: Ranks) -> Result<(), (Report, bool)> {
                 stop: Some(stop_flag().map_err(plain)?),
                 ranks,
             };
-            let summary = run::run(&c, &opts).map_err(|e| {
+            // On one rank the run's own thread is one of the pool's workers, so that each
+            // parallel pass starts from inside the pool: from outside it, each pass handed its
+            // work to the pool and slept on a futex until woken (5 % of a run's time, in system
+            // calls, by `perf`). Under MPI the main thread keeps the run: MPI is initialised for
+            // calls from it alone (`ranks::start`).
+            let summary = if ranks.size() > 1 {
+                run::run(&c, &opts)
+            } else {
+                rayon::scope(|_| run::run(&c, &opts))
+            };
+            let summary = summary.map_err(|e| {
                 let interrupted = matches!(e, Error::Interrupted { .. });
                 (report(e, &case), interrupted)
             })?;
