@@ -255,6 +255,7 @@ fn main_inner(ranks: Ranks) -> Result<(), (Report, bool)> {
             // work to the pool and slept on a futex until woken (5 % of a run's time, in system
             // calls, by `perf`). Under MPI the main thread keeps the run: MPI is initialised for
             // calls from it alone (`ranks::start`).
+            #[allow(clippy::result_large_err)] // the run's own error, passed on as it is
             let summary = if ranks.size() > 1 {
                 run::run(&c, &opts)
             } else {
