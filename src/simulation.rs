@@ -388,25 +388,31 @@ impl<const D: usize> Simulation<D> {
         let cn = self.model.formulation == Formulation::Corrected;
         if cn {
             let (nl, model, out) = (&self.neighbors, &self.model, &mut self.corrections);
-            match self.kernel {
+            let own = match self.kernel {
                 KernelKind::CubicSpline => {
-                    physics::corrections(CubicSpline, p, nl, model, owned, out);
+                    physics::corrections(CubicSpline, p, nl, model, owned, out)
                 }
                 KernelKind::WendlandC2 => {
-                    physics::corrections(WendlandC2, p, nl, model, owned, out);
+                    physics::corrections(WendlandC2, p, nl, model, owned, out)
                 }
-            }
+            };
             self.busy += lap.elapsed().as_secs_f64();
             lap = Instant::now();
             ranks.share(out, parts);
             self.exchanging += lap.elapsed().as_secs_f64();
             lap = Instant::now();
-            fallbacks = out.par_iter().filter(|c| c.fallback).count();
+            // The pass counted its own particles' fallbacks; with other ranks', all of them.
+            fallbacks = if ranks.size() > 1 {
+                out.par_iter().filter(|c| c.fallback).count()
+            } else {
+                own
+            };
             self.stats.correction_fallbacks += fallbacks as u64;
-            self.corr
-                .par_extend(self.corrections.par_iter().map(|c| c.b));
-            self.lambda
-                .par_extend(self.corrections.par_iter().map(|c| c.lambda_min));
+            // B and the surface indicator out of the corrections in one pass.
+            self.corrections
+                .par_iter()
+                .map(|c| (c.b, c.lambda_min))
+                .unzip_into_vecs(&mut self.corr, &mut self.lambda);
             self.ghosts
                 .extend_to_ghosts_with(&mut self.lambda, &self.symmetry, |l, _| l);
             // A ghost's B is its source's seen in the mirror: M B M, M = I − 2 e_a e_aᵀ.
