@@ -42,8 +42,8 @@ pub const LAMBDA_SURFACE: f64 = 0.7;
 pub struct Correction<const D: usize> {
     /// B_i: multiplies ∇_i W_ij (the identity where the correction is not applied).
     pub b: Tensor<D>,
-    /// Smallest eigenvalue of A_i, the surface indicator; where it is at least
-    /// [`LAMBDA_SURFACE`], possibly a lower bound of it that is too.
+    /// The surface indicator: the smallest eigenvalue of A_i, or a lower bound of it on the
+    /// same side of [`LAMBDA_MIN`] and [`LAMBDA_SURFACE`] (see [`surface_indicator`]).
     pub lambda_min: f64,
     /// Whether A_i was too near singular and the uncorrected gradient is kept.
     pub fallback: bool,
