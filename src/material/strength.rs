@@ -154,6 +154,9 @@ pub fn radial_return<const D: usize>(
     // f(Δ) = σ_eq − 3GΔ − Y(εp + Δ): f(0) > 0, f(σ_eq/3G) = −Y ≤ 0, f decreasing.
     let (mut lo, mut hi) = (0.0, sigma_eq / (3.0 * g));
     let mut d = 0.0;
+    // Y(εp + Δ) at the last Δ tried: the return's end (not asked again: a power law's yield
+    // costs a `powf`, and the return asks a handful of them).
+    let mut y_d = y;
     let mut f = sigma_eq - y;
     let tol = 1e-12 * sigma_eq;
     for _ in 0..100 {
@@ -164,7 +167,8 @@ pub fn radial_return<const D: usize>(
         } else {
             0.5 * (lo + hi)
         };
-        f = sigma_eq - 3.0 * g * d - strength.yield_stress_scaled(&at(d), k);
+        y_d = strength.yield_stress_scaled(&at(d), k);
+        f = sigma_eq - 3.0 * g * d - y_d;
         if f.abs() <= tol || hi - lo <= 1e-15 * hi {
             break;
         }
@@ -174,8 +178,7 @@ pub fn radial_return<const D: usize>(
             hi = d;
         }
     }
-    let y_new = strength.yield_stress_scaled(&at(d), k).max(0.0);
-    (s_trial * (y_new / sigma_eq), d)
+    (s_trial * (y_d.max(0.0) / sigma_eq), d)
 }
 
 #[cfg(test)]
