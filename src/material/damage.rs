@@ -269,11 +269,12 @@ impl super::Strength for Damaged<'_> {
             self.keep * self.inner.yield_stress_scaled(st, k)
         }
     }
-    fn hardening_modulus_scaled(&self, st: &super::StrengthState, k: f64) -> f64 {
+    fn yield_and_slope_scaled(&self, st: &super::StrengthState, k: f64) -> (f64, f64) {
         if self.keep <= 0.0 {
-            0.0
+            (0.0, 0.0)
         } else {
-            self.keep * self.inner.hardening_modulus_scaled(st, k)
+            let (y, slope) = self.inner.yield_and_slope_scaled(st, k);
+            (self.keep * y, self.keep * slope)
         }
     }
     fn homologous_temperature(&self, st: &super::StrengthState) -> f64 {

@@ -171,7 +171,7 @@ impl Strength for JohnsonCook {
     }
 
     fn hardening_modulus(&self, st: &StrengthState) -> f64 {
-        self.hardening_modulus_scaled(st, self.factors(st))
+        self.yield_and_slope_scaled(st, self.factors(st)).1
     }
 
     fn state_factor(&self, st: &StrengthState) -> f64 {
@@ -183,10 +183,13 @@ impl Strength for JohnsonCook {
         ((self.a + self.b * eps.powf(self.n)) * k).max(0.0)
     }
 
-    fn hardening_modulus_scaled(&self, st: &StrengthState, k: f64) -> f64 {
+    /// Y as [`Strength::yield_stress_scaled`], and ∂Y/∂εp = k B n εpⁿ/εp from the same power.
+    fn yield_and_slope_scaled(&self, st: &StrengthState, k: f64) -> (f64, f64) {
         let eps = st.eps_p.max(0.0);
+        let power = eps.powf(self.n);
+        let y = ((self.a + self.b * power) * k).max(0.0);
         let slope = if eps > 0.0 {
-            self.b * self.n * eps.powf(self.n - 1.0)
+            self.b * self.n * power / eps
         } else if self.n < 1.0 && self.b > 0.0 {
             f64::INFINITY
         } else if self.n == 1.0 {
@@ -194,7 +197,7 @@ impl Strength for JohnsonCook {
         } else {
             0.0
         };
-        slope * k.max(0.0)
+        (y, slope * k.max(0.0))
     }
 
     fn homologous_temperature(&self, st: &StrengthState) -> f64 {
@@ -241,8 +244,8 @@ mod tests {
             let k = jc.state_factor(&st);
             assert_eq!(jc.yield_stress_scaled(&st, k), jc.yield_stress(&st));
             assert_eq!(
-                jc.hardening_modulus_scaled(&st, k),
-                jc.hardening_modulus(&st)
+                jc.yield_and_slope_scaled(&st, k),
+                (jc.yield_stress(&st), jc.hardening_modulus(&st))
             );
         }
     }

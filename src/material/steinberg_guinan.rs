@@ -198,6 +198,17 @@ impl Strength for SteinbergGuinan {
         self.hardening(st.eps_p).1 * self.factor(st, self.dy_dp / self.yield_stress)
     }
 
+    /// Both from one evaluation of the hardening and of the pressure and temperature factor
+    /// (the same numbers as the two calls).
+    fn yield_and_slope_scaled(&self, st: &StrengthState, _k: f64) -> (f64, f64) {
+        if self.melted(st) {
+            return (0.0, 0.0);
+        }
+        let (y, slope) = self.hardening(st.eps_p);
+        let f = self.factor(st, self.dy_dp / self.yield_stress);
+        (y * f, slope * f)
+    }
+
     fn homologous_temperature(&self, st: &StrengthState) -> f64 {
         let tm = self.melt_temperature_at(st.eta);
         ((self.temperature(st.e) - T_REF) / (tm - T_REF).max(1e-9)).clamp(0.0, 1.0)
@@ -259,6 +270,17 @@ mod tests {
         let big = StrengthState { eps_p: 1e6, ..r };
         assert_relative_eq!(sg.yield_stress(&big), 0.68e9, max_relative = 1e-14);
         assert_eq!(sg.hardening_modulus(&big), 0.0);
+        // The return's one call gives the two calls' numbers, bit for bit (melted included).
+        let molten = StrengthState {
+            e: 930.0 * 885.0,
+            ..r
+        };
+        for s in [r, st, big, molten] {
+            assert_eq!(
+                sg.yield_and_slope_scaled(&s, 1.0),
+                (sg.yield_stress(&s), sg.hardening_modulus(&s))
+            );
+        }
     }
 
     #[test]

@@ -43,7 +43,7 @@ pub trait Strength: Send + Sync + std::fmt::Debug {
     /// ∂Y/∂εp at the state (Pa); may be infinite (a power law at εp = 0).
     fn hardening_modulus(&self, st: &StrengthState) -> f64;
     /// A factor of Y and ∂Y/∂εp that does not depend on εp (Johnson–Cook's rate and thermal
-    /// factors), for [`Strength::yield_stress_scaled`] and [`Strength::hardening_modulus_scaled`]:
+    /// factors), for [`Strength::yield_stress_scaled`] and [`Strength::yield_and_slope_scaled`]:
     /// the radial return's iterations change only εp, so it is computed once a return instead
     /// of twice an iteration. 1 by default (the model has none).
     fn state_factor(&self, _st: &StrengthState) -> f64 {
@@ -54,9 +54,11 @@ pub trait Strength: Send + Sync + std::fmt::Debug {
     fn yield_stress_scaled(&self, st: &StrengthState, _k: f64) -> f64 {
         self.yield_stress(st)
     }
-    /// [`Strength::hardening_modulus`], given k as in [`Strength::yield_stress_scaled`].
-    fn hardening_modulus_scaled(&self, st: &StrengthState, _k: f64) -> f64 {
-        self.hardening_modulus(st)
+    /// ([`Strength::yield_stress_scaled`], [`Strength::hardening_modulus`]) given k as there,
+    /// in one call: a power law's slope follows from its power, εp^(n − 1) = εpⁿ/εp, so that
+    /// each iteration of the return costs one `powf`, not two.
+    fn yield_and_slope_scaled(&self, st: &StrengthState, k: f64) -> (f64, f64) {
+        (self.yield_stress_scaled(st, k), self.hardening_modulus(st))
     }
     /// Homologous temperature T* = (T − T_room)/(T_melt − T_room) in [0, 1] (1: molten, no
     /// deviatoric stress), for the damage models; 0 for a model without temperature.
@@ -138,7 +140,7 @@ pub fn radial_return<const D: usize>(
         return (Tensor::<D>::zeros(), 0.0);
     }
     let k = strength.state_factor(st);
-    let y = strength.yield_stress_scaled(st, k);
+    let (y, slope_y) = strength.yield_and_slope_scaled(st, k);
     let sigma_eq = (1.5 * deviator_norm2(s_trial)).sqrt();
     if sigma_eq <= y {
         return (*s_trial, 0.0);
@@ -154,20 +156,20 @@ pub fn radial_return<const D: usize>(
     // f(Δ) = σ_eq − 3GΔ − Y(εp + Δ): f(0) > 0, f(σ_eq/3G) = −Y ≤ 0, f decreasing.
     let (mut lo, mut hi) = (0.0, sigma_eq / (3.0 * g));
     let mut d = 0.0;
-    // Y(εp + Δ) at the last Δ tried: the return's end (not asked again: a power law's yield
-    // costs a `powf`, and the return asks a handful of them).
-    let mut y_d = y;
+    // Y(εp + Δ) and ∂Y/∂εp there at the last Δ tried: the return's end is the last (not asked
+    // again: a power law's yield costs a `powf`, and the return asks a handful of them).
+    let (mut y_d, mut slope_d) = (y, slope_y);
     let mut f = sigma_eq - y;
     let tol = 1e-12 * sigma_eq;
     for _ in 0..100 {
-        let slope = 3.0 * g + strength.hardening_modulus_scaled(&at(d), k);
+        let slope = 3.0 * g + slope_d;
         let newton = d + f / slope;
         d = if newton.is_finite() && newton > lo && newton < hi {
             newton
         } else {
             0.5 * (lo + hi)
         };
-        y_d = strength.yield_stress_scaled(&at(d), k);
+        (y_d, slope_d) = strength.yield_and_slope_scaled(&at(d), k);
         f = sigma_eq - 3.0 * g * d - y_d;
         if f.abs() <= tol || hi - lo <= 1e-15 * hi {
             break;
