@@ -1454,7 +1454,10 @@ fn cut_pair<const D: usize, K: Kernel, const CN: bool>(
             None => return,
         }
     };
-    let (cut, share) = tension_cut::<D, K, CN>(kernel, i, j, xij, pass);
+    // The kernel's gradient factor, shared by the two terms.
+    let r = dot(xij, xij).sqrt();
+    let gf = kernel.grad_factor::<D>(r, 0.5 * (gi.h + gj.h));
+    let (cut, share) = tension_cut::<D, K, CN>(kernel, (i, j), xij, (r, gf), pass);
     let mj = gj.m;
     for a in 0..D {
         cuts.acc[a] -= cut[a] * mj;
@@ -1462,7 +1465,7 @@ fn cut_pair<const D: usize, K: Kernel, const CN: bool>(
         cuts.de_lag += mj * (f64::from(gi.u[a]) - f64::from(gj.u[a])) * share[a];
     }
     if open {
-        let (drho, grad_v) = kinematic_terms::<D, K, CN>(kernel, i, j, xij, pass);
+        let (drho, grad_v) = kinematic_terms::<D, CN>((i, j), xij, gf, pass);
         cuts.drho -= drho;
         for a in 0..D {
             for b in 0..D {
@@ -1488,17 +1491,14 @@ fn within_support<const D: usize>(gi: &Gather<D>, gk: &Gather<D>) -> bool {
 /// The pair's terms in i's continuity and velocity gradient, as the pass adds them:
 /// (m_j w_ij · ∇̃_i W_ij, −V_j w_ij ⊗ ∇̃_i W_ij) with w = v + dv the velocity at the step's
 /// middle, ∇̃ = B_i ∇ in CN-SPH, whose continuity term is V_j w_ij · ∇̃_i W_ij (times ρ_i with
-/// the rest of the sum).
-fn kinematic_terms<const D: usize, K: Kernel, const CN: bool>(
-    kernel: K,
-    i: usize,
-    j: usize,
+/// the rest of the sum). `gf`: the kernel's gradient factor, ∇W = x_ij gf.
+fn kinematic_terms<const D: usize, const CN: bool>(
+    (i, j): (usize, usize),
     xij: &[f64; D],
+    gf: f64,
     pass: &Pass<D>,
 ) -> (f64, [[f64; D]; D]) {
     let (gi, gj) = (&pass.gather[i], &pass.gather[j]);
-    let r = dot(xij, xij).sqrt();
-    let gf = kernel.grad_factor::<D>(r, 0.5 * (gi.h + gj.h));
     let grad: [f64; D] = std::array::from_fn(|k| xij[k] * gf);
     let vij: [f64; D] =
         std::array::from_fn(|k| gi.v[k] - gj.v[k] + (f64::from(gi.dv[k]) - f64::from(gj.dv[k])));
@@ -1514,17 +1514,16 @@ fn kinematic_terms<const D: usize, K: Kernel, const CN: bool>(
 /// the artificial stress's term — the pair force less this keeps only the compressive
 /// pressures. A failed particle carries no
 /// tension and no deviator (`material::damage`), so its own part is zero. Returns the cut and
-/// i's share of its work, split as the pair's (see `conserve_chunk`).
+/// i's share of its work, split as the pair's (see `conserve_chunk`). (r, gf): the pair's
+/// distance and the kernel's gradient factor, ∇W = x_ij gf.
 fn tension_cut<const D: usize, K: Kernel, const CN: bool>(
     kernel: K,
-    i: usize,
-    j: usize,
+    (i, j): (usize, usize),
     xij: &[f64; D],
+    (r, gf): (f64, f64),
     pass: &Pass<D>,
 ) -> ([f64; D], [f64; D]) {
     let (gi, gj) = (&pass.gather[i], &pass.gather[j]);
-    let r = dot(xij, xij).sqrt();
-    let gf = kernel.grad_factor::<D>(r, 0.5 * (gi.h + gj.h));
     let squeeze = |k: usize, g: &Gather<D>| pass.pressure[k].max(0.0) / (g.rho * g.rho);
     // A side on the plain ∇W, σ/ρ² + max(p, 0)/ρ² I: conventional SPH's, and the plain sides
     // of CN-SPH's energy split.
