@@ -19,9 +19,9 @@
 //! member passes on only the compressive pressures of its two particles (`physics::tension_cut`:
 //! the tension and the deviator of the intact side are taken out of the pair's stress terms;
 //! the cut is the pair's, the same from either side, so momentum is exact). So does a pair of
-//! intact particles with a failed particle between them (`physics::severed`: within ¾ of its
-//! spacing of the segment that joins them), so that a crack one particle wide cuts the bodies on
-//! either side apart at once. Where the crack is open (its failed particle at no pressure), the
+//! intact particles with a failed particle between them (`physics::CrackLists::severs`: within
+//! ¾ of its spacing of the segment that joins them), so that a crack one particle wide cuts the
+//! bodies on either side apart at once. Where the crack is open (its failed particle at no pressure), the
 //! intact particles also leave the pair out of their continuity and their velocity gradient:
 //! the crack's opening is not their own expansion or strain. Until 2026-11-27 they read it as
 //! theirs, went into 2–4 GPa of tension beside the crack, flowed and failed in turn, and a
