@@ -21,11 +21,11 @@
 //! the cut is the pair's, the same from either side, so momentum is exact). So does a pair of
 //! intact particles with a failed particle between them (`physics::CrackLists::severs`: within
 //! ¾ of its spacing of the segment that joins them), so that a crack one particle wide cuts the
-//! bodies on either side apart at once. Where the crack is open (its failed particle at no pressure), the
-//! intact particles also leave the pair out of their continuity and their velocity gradient:
-//! the crack's opening is not their own expansion or strain. Until 2026-11-27 they read it as
-//! theirs, went into 2–4 GPa of tension beside the crack, flowed and failed in turn, and a
-//! failed zone grew from every crack: every particle of the strip of
+//! bodies on either side apart at once. Where the crack is open (its failed particle at no
+//! pressure), the intact particles also leave the pair out of their continuity and their
+//! velocity gradient: the crack's opening is not their own expansion or strain. Until
+//! 2026-11-27 they read it as theirs, went into 2–4 GPa of tension beside the crack, flowed and
+//! failed in turn, and a failed zone grew from every crack: every particle of the strip of
 //! `examples/jc_failure_tension.toml` failed, where now two cracks of 16 particles cross it.
 //! Where the failed particle is compressed, the rubble carries the load and deforms with its
 //! neighbours, and the pair stays in their kinematics. This is the "failed neighbours meet only

@@ -1148,9 +1148,9 @@ impl<const D: usize> Default for Cut<D> {
 /// so that the test runs over the candidates in vector lanes (on AVX2 where the CPU has it)
 /// without gathering their 200-byte records: by `perf`, the test was 9 % of a step of those
 /// cubes, 5 % since (a pair asks it of 7 candidates on average, and 90 % of the pairs asked
-/// are not severed). Kept out of the
-/// pass's own frame: with the candidates in an array there (of 32 entries, or even of one),
-/// the conventional cubes, where nothing fails, ran about 15 % slower.
+/// are not severed). Kept out of the pass's own frame: with the candidates in an array there
+/// (of 32 entries, or even of one), the conventional cubes, where nothing fails, ran about 15 %
+/// slower.
 #[derive(Debug, Clone)]
 struct CrackLists<const D: usize> {
     /// ends[i]: where particle i's candidates end (they start at ends[i − 1]).
