@@ -262,13 +262,6 @@ impl super::Strength for Damaged<'_> {
     fn state_factor(&self, st: &super::StrengthState) -> f64 {
         self.inner.state_factor(st)
     }
-    fn yield_stress_scaled(&self, st: &super::StrengthState, k: f64) -> f64 {
-        if self.keep <= 0.0 {
-            0.0
-        } else {
-            self.keep * self.inner.yield_stress_scaled(st, k)
-        }
-    }
     fn yield_and_slope_scaled(&self, st: &super::StrengthState, k: f64) -> (f64, f64) {
         if self.keep <= 0.0 {
             (0.0, 0.0)

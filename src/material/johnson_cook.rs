@@ -167,7 +167,7 @@ impl Strength for JohnsonCook {
     }
 
     fn yield_stress(&self, st: &StrengthState) -> f64 {
-        self.yield_stress_scaled(st, self.factors(st))
+        self.yield_and_slope_scaled(st, self.factors(st)).0
     }
 
     fn hardening_modulus(&self, st: &StrengthState) -> f64 {
@@ -178,12 +178,7 @@ impl Strength for JohnsonCook {
         self.factors(st)
     }
 
-    fn yield_stress_scaled(&self, st: &StrengthState, k: f64) -> f64 {
-        let eps = st.eps_p.max(0.0);
-        ((self.a + self.b * eps.powf(self.n)) * k).max(0.0)
-    }
-
-    /// Y as [`Strength::yield_stress_scaled`], and ∂Y/∂εp = k B n εpⁿ/εp from the same power.
+    /// Y = k (A + B εpⁿ), and ∂Y/∂εp = k B n εpⁿ/εp from the same power.
     fn yield_and_slope_scaled(&self, st: &StrengthState, k: f64) -> (f64, f64) {
         let eps = st.eps_p.max(0.0);
         let power = eps.powf(self.n);
@@ -242,7 +237,6 @@ mod tests {
                 ..StrengthState::REFERENCE
             };
             let k = jc.state_factor(&st);
-            assert_eq!(jc.yield_stress_scaled(&st, k), jc.yield_stress(&st));
             assert_eq!(
                 jc.yield_and_slope_scaled(&st, k),
                 (jc.yield_stress(&st), jc.hardening_modulus(&st))

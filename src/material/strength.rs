@@ -43,22 +43,18 @@ pub trait Strength: Send + Sync + std::fmt::Debug {
     /// ∂Y/∂εp at the state (Pa); may be infinite (a power law at εp = 0).
     fn hardening_modulus(&self, st: &StrengthState) -> f64;
     /// A factor of Y and ∂Y/∂εp that does not depend on εp (Johnson–Cook's rate and thermal
-    /// factors), for [`Strength::yield_stress_scaled`] and [`Strength::yield_and_slope_scaled`]:
-    /// the radial return's iterations change only εp, so it is computed once a return instead
-    /// of twice an iteration. 1 by default (the model has none).
+    /// factors), for [`Strength::yield_and_slope_scaled`]: the radial return's iterations
+    /// change only εp, so it is computed once a return instead of once an iteration. 1 by
+    /// default (the model has none).
     fn state_factor(&self, _st: &StrengthState) -> f64 {
         1.0
     }
-    /// [`Strength::yield_stress`], given the [`Strength::state_factor`] k of the same rate,
-    /// temperature and pressure: the same number.
-    fn yield_stress_scaled(&self, st: &StrengthState, _k: f64) -> f64 {
-        self.yield_stress(st)
-    }
-    /// ([`Strength::yield_stress_scaled`], [`Strength::hardening_modulus`]) given k as there,
-    /// in one call: a power law's slope follows from its power, εp^(n − 1) = εpⁿ/εp, so that
-    /// each iteration of the return costs one `powf`, not two.
-    fn yield_and_slope_scaled(&self, st: &StrengthState, k: f64) -> (f64, f64) {
-        (self.yield_stress_scaled(st, k), self.hardening_modulus(st))
+    /// ([`Strength::yield_stress`], [`Strength::hardening_modulus`]) in one call, given the
+    /// [`Strength::state_factor`] k of the same rate, temperature and pressure: the same
+    /// numbers. A power law's slope follows from its power, εp^(n − 1) = εpⁿ/εp, so that each
+    /// iteration of the return costs one `powf`, not two.
+    fn yield_and_slope_scaled(&self, st: &StrengthState, _k: f64) -> (f64, f64) {
+        (self.yield_stress(st), self.hardening_modulus(st))
     }
     /// Homologous temperature T* = (T − T_room)/(T_melt − T_room) in [0, 1] (1: molten, no
     /// deviatoric stress), for the damage models; 0 for a model without temperature.
