@@ -117,17 +117,12 @@ shape = {{ type = "box", min = [0.0, 0.0, 0.0], max = [{l}, {l}, {l}] }}
 /// The sphere-plate demo deck at its default resolution.
 pub const SPHERE_PLATE: &str = include_str!("../examples/sphere_plate.toml");
 
-/// Peak and current resident memory of the process (VmHWM, VmRSS), bytes.
+/// Peak and current resident memory of the process (VmHWM, VmRSS), bytes (0 where unknown).
 fn rss() -> (u64, u64) {
-    let text = std::fs::read_to_string("/proc/self/status").unwrap_or_default();
-    let get = |key: &str| {
-        text.lines()
-            .find(|l| l.starts_with(key))
-            .and_then(|l| l.split_whitespace().nth(1))
-            .and_then(|v| v.parse::<u64>().ok())
-            .map_or(0, |kb| kb * 1024)
-    };
-    (get("VmHWM:"), get("VmRSS:"))
+    (
+        crate::machine::peak_resident_memory().unwrap_or(0),
+        crate::machine::resident_memory().unwrap_or(0),
+    )
 }
 
 /// Reset the peak-RSS counter to the current RSS (Linux ≥ 4.0; ignored elsewhere).

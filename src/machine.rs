@@ -28,6 +28,21 @@ pub fn available_memory() -> Option<f64> {
     best
 }
 
+/// The process's peak resident memory so far (VmHWM, bytes), where the system reports it.
+pub fn peak_resident_memory() -> Option<u64> {
+    status_bytes("VmHWM:")
+}
+
+/// The process's resident memory now (VmRSS, bytes), where the system reports it.
+pub fn resident_memory() -> Option<u64> {
+    status_bytes("VmRSS:")
+}
+
+fn status_bytes(key: &str) -> Option<u64> {
+    let status = std::fs::read_to_string("/proc/self/status").ok()?;
+    kb_field(&status, key).map(|b| b as u64)
+}
+
 /// Cores available to this process.
 pub fn cores() -> usize {
     std::thread::available_parallelism().map_or(1, |c| c.get())

@@ -367,6 +367,7 @@ impl<const D: usize> Run<'_, D> {
                     .max(f64::MIN_POSITIVE),
             min_interbody_distance: tally.min_gap,
             mixing: pair_mixing(&self.sim.body_names, &tally.mixing),
+            peak_memory_bytes: crate::machine::peak_resident_memory(),
             modelled_part: modelled_part(self.case),
             status: status.to_string(),
             reason,

@@ -104,6 +104,11 @@ fn run_outputs_open_in_vtk() {
         String::from_utf8_lossy(&run.stderr)
     );
     let s = Summary::read(&out.join("summary.json")).unwrap();
+    // The run's peak resident memory, in bytes (not kB: a few MB at least, well below a TB).
+    if cfg!(target_os = "linux") {
+        let peak = s.peak_memory_bytes.expect("Linux reports the peak memory");
+        assert!(peak > 4 << 20 && peak < 1 << 40, "peak memory {peak} B");
+    }
     let fields = "body,velocity,pressure,density,internal_energy,deviatoric_stress,von_mises,plastic_strain,damage,smoothing_length,contact_force";
     let pvd = out.join("hugoniot_elastic_limit.pvd");
     let check = Command::new(python())

@@ -180,6 +180,7 @@ fn every_output_column_field_and_key_is_documented() {
         momentum_error: 0.0,
         min_interbody_distance: None,
         mixing: Vec::new(),
+        peak_memory_bytes: Some(0),
         modelled_part: String::new(),
         status: String::new(),
         reason: String::new(),

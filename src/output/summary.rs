@@ -39,6 +39,10 @@ pub struct Summary {
     pub min_interbody_distance: Option<f64>,
     /// The mixing figures of each pair of bodies, their largest over the run (see `mixing`).
     pub mixing: Vec<PairMixing>,
+    /// Peak resident memory of the process (bytes; None where the system does not report it;
+    /// under MPI, the root rank's).
+    #[serde(default)]
+    pub peak_memory_bytes: Option<u64>,
     /// Which part of the bodies the run models (symmetry planes), and so what the totals above
     /// and in `history.csv` are totals of.
     pub modelled_part: String,
