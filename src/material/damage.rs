@@ -259,8 +259,20 @@ impl super::Strength for Damaged<'_> {
             self.keep * self.inner.hardening_modulus(st)
         }
     }
+    /// 1 for a failed particle (its yield is 0 whatever the factor: not computed).
     fn state_factor(&self, st: &super::StrengthState) -> f64 {
-        self.inner.state_factor(st)
+        if self.keep <= 0.0 {
+            1.0
+        } else {
+            self.inner.state_factor(st)
+        }
+    }
+    fn yield_floor(&self, st: &super::StrengthState) -> f64 {
+        if self.keep <= 0.0 {
+            0.0
+        } else {
+            self.keep * self.inner.yield_floor(st)
+        }
     }
     fn yield_and_slope_scaled(&self, st: &super::StrengthState, k: f64) -> (f64, f64) {
         if self.keep <= 0.0 {

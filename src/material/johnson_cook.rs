@@ -195,6 +195,20 @@ impl Strength for JohnsonCook {
         (y, slope * k.max(0.0))
     }
 
+    /// A (1 − T*) where m ≥ 1, A (1 − √T*) where m ≥ ½ (T*^m below either, T* in [0, 1]), and
+    /// 0 below: the rate factor is at least 1 (C ≥ 0, ε̇* ≥ 1) and B εpⁿ ≥ 0.
+    fn yield_floor(&self, st: &StrengthState) -> f64 {
+        let t = self.homologous_temperature(st);
+        let thermal = if self.m >= 1.0 {
+            1.0 - t
+        } else if self.m >= 0.5 {
+            1.0 - t.sqrt()
+        } else {
+            0.0
+        };
+        self.a * thermal
+    }
+
     fn homologous_temperature(&self, st: &StrengthState) -> f64 {
         ((self.temperature(st.w_p) - self.room_temperature)
             / (self.melt_temperature - self.room_temperature))
@@ -313,6 +327,121 @@ mod tests {
             assert_relative_eq!(von_mises(&out), y, max_relative = 1e-10);
             assert_relative_eq!(von_mises(&s) - 3.0 * g * d, y, max_relative = 1e-10);
         }
+    }
+
+    /// Johnson–Cook's floor of Y is never above Y (any m, rate, temperature and εp), and is Y
+    /// itself at εp = 0, at the reference rate, for m = 1.
+    #[test]
+    fn yield_floor_is_below_the_yield_stress() {
+        for m in [0.3, 0.7, 1.0, 1.1, 1.7] {
+            let jc = JohnsonCook { m, ..steel() };
+            for eps_p in [0.0, 1e-6, 0.2, 2.0] {
+                for rate in [0.0, 1.0, 1e5] {
+                    for heat in [0.0, 1.0, 300.0, 1500.0] {
+                        let st = StrengthState {
+                            eps_p,
+                            rate,
+                            w_p: heat * 460.0 / 0.9,
+                            ..StrengthState::REFERENCE
+                        };
+                        let (floor, y) = (jc.yield_floor(&st), jc.yield_stress(&st));
+                        assert!(floor <= y, "m = {m}, {st:?}: {floor} > {y}");
+                        assert!(floor >= 0.0);
+                    }
+                }
+            }
+        }
+        let jc = JohnsonCook { m: 1.0, ..steel() };
+        let st = StrengthState {
+            w_p: 300.0 * 460.0 / 0.9,
+            ..StrengthState::REFERENCE
+        };
+        assert_eq!(jc.yield_floor(&st), jc.yield_stress(&st));
+        assert_eq!(JohnsonCook { m: 0.3, ..steel() }.yield_floor(&st), 0.0);
+    }
+
+    /// Counts the return's evaluations of Y.
+    #[derive(Debug)]
+    struct Counting<'a> {
+        inner: &'a dyn Strength,
+        calls: std::sync::atomic::AtomicUsize,
+    }
+
+    impl Strength for Counting<'_> {
+        fn shear_modulus(&self, st: &StrengthState) -> f64 {
+            self.inner.shear_modulus(st)
+        }
+        fn yield_stress(&self, st: &StrengthState) -> f64 {
+            self.inner.yield_stress(st)
+        }
+        fn hardening_modulus(&self, st: &StrengthState) -> f64 {
+            self.inner.hardening_modulus(st)
+        }
+        fn state_factor(&self, st: &StrengthState) -> f64 {
+            self.inner.state_factor(st)
+        }
+        fn yield_and_slope_scaled(&self, st: &StrengthState, k: f64) -> (f64, f64) {
+            self.calls
+                .fetch_add(1, std::sync::atomic::Ordering::Relaxed);
+            self.inner.yield_and_slope_scaled(st, k)
+        }
+        fn yield_floor(&self, st: &StrengthState) -> f64 {
+            self.inner.yield_floor(st)
+        }
+        fn homologous_temperature(&self, st: &StrengthState) -> f64 {
+            self.inner.homologous_temperature(st)
+        }
+    }
+
+    /// A step's plastic increment asks Y twice (at the start and after one Newton step, whose
+    /// successor the curvature shows to be within the tolerance), and lands on the surface; a
+    /// failed particle's return (Y = 0) ends at Δεp = σ_eq/3G after one step, where bisecting
+    /// took 24; a trial under the floor asks nothing.
+    #[test]
+    fn return_asks_few_evaluations() {
+        let jc = steel();
+        let g = jc.shear_modulus;
+        let st = StrengthState {
+            eps_p: 0.2,
+            rate: 3e3,
+            w_p: 1e5,
+            ..StrengthState::REFERENCE
+        };
+        let unit = Tensor::<3>::new(2.0, 0.3, 0.0, 0.3, -0.5, 0.1, 0.0, 0.1, -1.5);
+        let unit = unit / von_mises(&unit);
+        let count = |strength: &dyn Strength, sigma_eq: f64| {
+            let counting = Counting {
+                inner: strength,
+                calls: 0.into(),
+            };
+            let (out, d) = radial_return(&(unit * sigma_eq), &st, &counting);
+            (out, d, counting.calls.into_inner())
+        };
+        for increment in [1e-5, 1e-4, 1e-3] {
+            let y0 = jc.yield_stress(&st);
+            let (out, d, calls) = count(&jc, y0 + 3.0 * g * increment);
+            let y = jc.yield_stress(&StrengthState {
+                eps_p: st.eps_p + d,
+                ..st
+            });
+            assert_relative_eq!(von_mises(&out), y, max_relative = 1e-12);
+            assert_relative_eq!(
+                y0 + 3.0 * g * increment - 3.0 * g * d,
+                y,
+                max_relative = 1e-12
+            );
+            assert_eq!(calls, 2, "increment {increment}");
+        }
+        let failed = crate::material::damage::Damaged {
+            inner: &jc,
+            keep: 0.0,
+        };
+        let (out, d, calls) = count(&failed, 1e9);
+        assert_eq!(out, Tensor::<3>::zeros());
+        assert_relative_eq!(d, 1e9 / (3.0 * g), max_relative = 1e-15);
+        assert_eq!(calls, 2);
+        let (out, d, calls) = count(&jc, 0.5 * jc.a);
+        assert_eq!((out, d, calls), (unit * (0.5 * jc.a), 0.0, 0));
     }
 
     #[test]
