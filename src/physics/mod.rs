@@ -735,9 +735,22 @@ fn particle_rates<const D: usize, K: Kernel, const ART: bool, const CN: bool>(
         if gi.failed {
             !gj.failed || ART
         } else {
-            gj.failed || (shielded && pass.cracks.cracked[j])
+            gj.failed | (shielded & pass.cracks.cracked[j])
         }
     };
+    // The pairs to cut, queued without a branch on the answer (about one pair in ten beside a
+    // crack, in no order a predictor follows) or on whether j is in the support, and cut in
+    // list order (the same sums as cutting each at once).
+    let mut cut_queue = [0u32; BATCH];
+    let mut cut_queued = 0;
+    macro_rules! cut_all {
+        () => {
+            for &j in &cut_queue[..cut_queued] {
+                let xij: [f64; D] = std::array::from_fn(|k| xi[k] - gather[j as usize].x[k]);
+                cut_pair::<D, K, CN>(kernel, (i, j as usize), &xij, pass, &mut cuts);
+            }
+        };
+    }
 
     // CN-SPH: the correction pass has marked the list's entries in the support (a particle
     // with neighbours of its own body only): they are queued in list order, as the filter
@@ -897,11 +910,17 @@ fn particle_rates<const D: usize, K: Kernel, const ART: bool, const CN: bool>(
                 continue;
             }
         }
-        if inside && pass.any_failed && cuttable(j as usize, gj) {
-            cut_pair::<D, K, CN>(kernel, (i, j as usize), &xij, pass, &mut cuts);
+        if pass.any_failed {
+            cut_queue[cut_queued] = j;
+            cut_queued += (inside & cuttable(j as usize, gj)) as usize;
+            if cut_queued == BATCH {
+                cut_all!();
+                cut_queued = 0;
+            }
         }
         queue!(j, inside);
     }
+    cut_all!();
     count += queued as u32;
     let used = queued.div_ceil(LANES) * LANES;
     queue[queued..used].fill(padding);
