@@ -240,24 +240,27 @@ pub struct Damaged<'a> {
     pub keep: f64,
 }
 
+impl Damaged<'_> {
+    /// keep · x, and 0 for a failed particle whatever x is (not computed).
+    fn share(&self, x: impl FnOnce() -> f64) -> f64 {
+        if self.keep <= 0.0 {
+            0.0
+        } else {
+            self.keep * x()
+        }
+    }
+}
+
 impl super::Strength for Damaged<'_> {
     fn shear_modulus(&self, st: &super::StrengthState) -> f64 {
         self.inner.shear_modulus(st)
     }
     /// keep · Y, and 0 for a failed particle also where Y = ∞ (an elastic material).
     fn yield_stress(&self, st: &super::StrengthState) -> f64 {
-        if self.keep <= 0.0 {
-            0.0
-        } else {
-            self.keep * self.inner.yield_stress(st)
-        }
+        self.share(|| self.inner.yield_stress(st))
     }
     fn hardening_modulus(&self, st: &super::StrengthState) -> f64 {
-        if self.keep <= 0.0 {
-            0.0
-        } else {
-            self.keep * self.inner.hardening_modulus(st)
-        }
+        self.share(|| self.inner.hardening_modulus(st))
     }
     /// 1 for a failed particle (its yield is 0 whatever the factor: not computed).
     fn state_factor(&self, st: &super::StrengthState) -> f64 {
@@ -268,11 +271,7 @@ impl super::Strength for Damaged<'_> {
         }
     }
     fn yield_floor(&self, st: &super::StrengthState) -> f64 {
-        if self.keep <= 0.0 {
-            0.0
-        } else {
-            self.keep * self.inner.yield_floor(st)
-        }
+        self.share(|| self.inner.yield_floor(st))
     }
     fn yield_and_slope_scaled(&self, st: &super::StrengthState, k: f64) -> (f64, f64) {
         if self.keep <= 0.0 {
