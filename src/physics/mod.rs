@@ -730,26 +730,51 @@ fn particle_rates<const D: usize, K: Kernel, const ART: bool, const CN: bool>(
     // is zero to the bit, and neither is intact to lose its kinematics; only the artificial
     // stress, where it is on, is left to take out.
     let mut cuts = Cut::<D>::default();
-    let shielded = !pass.cracks.range(i).is_empty();
-    let cuttable = |j: usize, gj: &Gather<D>| {
+    let cuttable = |gj: &Gather<D>| {
         if gi.failed {
             !gj.failed || ART
         } else {
-            gj.failed | (shielded & pass.cracks.cracked[j])
+            gj.failed
         }
     };
-    // The pairs to cut, queued without a branch on the answer (about one pair in ten beside a
-    // crack, in no order a predictor follows) or on whether j is in the support, and cut in
-    // list order (the same sums as cutting each at once).
+    // The pairs with a failed member to cut, by their slots in the list, queued without a
+    // branch on whether j is in the support or has failed; and an intact i's severed pairs,
+    // found before the pass ([`CrackLists::severed`]). Both are cut in list order (the same sums
+    // as cutting each at once).
+    let severed = pass.cracks.severed(i);
+    let mut met = 0;
     let mut cut_queue = [0u32; BATCH];
     let mut cut_queued = 0;
-    macro_rules! cut_all {
-        () => {
-            for &j in &cut_queue[..cut_queued] {
-                let xij: [f64; D] = std::array::from_fn(|k| xi[k] - gather[j as usize].x[k]);
-                cut_pair::<D, K, CN>(kernel, (i, j as usize), &xij, pass, &mut cuts);
+    // The queued pairs, and the severed pairs before slot `upto`, merged in slot order.
+    macro_rules! cut_before {
+        ($upto:expr) => {{
+            let upto: u32 = $upto;
+            let mut q = 0;
+            loop {
+                let member = if q < cut_queued {
+                    cut_queue[q]
+                } else {
+                    u32::MAX
+                };
+                let sever = match severed.get(met) {
+                    Some(&(slot, _)) if slot < upto => slot,
+                    _ => u32::MAX,
+                };
+                if member == u32::MAX && sever == u32::MAX {
+                    break;
+                }
+                let (slot, kind) = if sever < member {
+                    met += 1;
+                    (sever, CutKind::severed(severed[met - 1].1))
+                } else {
+                    q += 1;
+                    (member, CutKind::Member)
+                };
+                let j = neighbors[slot as usize] as usize;
+                let xij: [f64; D] = std::array::from_fn(|k| xi[k] - gather[j].x[k]);
+                cut_pair::<D, K, CN>(kernel, (i, j), &xij, kind, pass, &mut cuts);
             }
-        };
+        }};
     }
 
     // CN-SPH: the correction pass has marked the list's entries in the support (a particle
@@ -764,11 +789,16 @@ fn particle_rates<const D: usize, K: Kernel, const ART: bool, const CN: bool>(
         for (w, &word) in mask.iter().enumerate() {
             let mut bits = word;
             while bits != 0 {
-                let j = neighbors[64 * w + bits.trailing_zeros() as usize];
+                let slot = 64 * w + bits.trailing_zeros() as usize;
+                let j = neighbors[slot];
                 bits &= bits - 1;
-                if pass.any_failed && cuttable(j as usize, &gather[j as usize]) {
-                    let xij: [f64; D] = std::array::from_fn(|k| xi[k] - gather[j as usize].x[k]);
-                    cut_pair::<D, K, CN>(kernel, (i, j as usize), &xij, pass, &mut cuts);
+                if pass.any_failed {
+                    cut_queue[cut_queued] = slot as u32;
+                    cut_queued += cuttable(&gather[j as usize]) as usize;
+                    if cut_queued == BATCH {
+                        cut_before!(slot as u32 + 1);
+                        cut_queued = 0;
+                    }
                 }
                 queue!(j, true);
             }
@@ -776,7 +806,7 @@ fn particle_rates<const D: usize, K: Kernel, const ART: bool, const CN: bool>(
     }
     // Otherwise the whole list, skin included, through the filter.
     let unmarked = if marked.is_some() { &[][..] } else { neighbors };
-    for &j in unmarked {
+    for (slot, &j) in unmarked.iter().enumerate() {
         let gj = &gather[j as usize];
         let xij: [f64; D] = std::array::from_fn(|k| xi[k] - gj.x[k]);
         let r2 = dot(&xij, &xij);
@@ -911,16 +941,17 @@ fn particle_rates<const D: usize, K: Kernel, const ART: bool, const CN: bool>(
             }
         }
         if pass.any_failed {
-            cut_queue[cut_queued] = j;
-            cut_queued += (inside & cuttable(j as usize, gj)) as usize;
+            cut_queue[cut_queued] = slot as u32;
+            cut_queued += (inside & cuttable(gj)) as usize;
             if cut_queued == BATCH {
-                cut_all!();
+                cut_before!(slot as u32 + 1);
                 cut_queued = 0;
             }
         }
         queue!(j, inside);
     }
-    cut_all!();
+    cut_before!(u32::MAX);
+    debug_assert_eq!(met, severed.len(), "particle {i} cut every severed pair");
     count += queued as u32;
     let used = queued.div_ceil(LANES) * LANES;
     queue[queued..used].fill(padding);
@@ -1136,6 +1167,25 @@ fn finish_corrected<const D: usize>(b: &Tensor<D>, rho: f64, g: &Tensor<D>) -> (
     (-rho * l.trace(), l)
 }
 
+/// Why a pair is cut ([`cut_pair`]): a failed member, or a failed particle between two intact
+/// ones with the crack closed or open ([`CrackLists::severs`]).
+#[derive(Debug, Clone, Copy, PartialEq)]
+enum CutKind {
+    Member,
+    Closed,
+    Open,
+}
+
+impl CutKind {
+    fn severed(open: bool) -> Self {
+        if open {
+            CutKind::Open
+        } else {
+            CutKind::Closed
+        }
+    }
+}
+
 /// What the cut pairs of a particle take out of its sums (see [`cut_pair`]).
 struct Cut<const D: usize> {
     acc: [f64; D],
@@ -1167,9 +1217,13 @@ impl<const D: usize> Default for Cut<D> {
 /// so that the test runs over the candidates in vector lanes (on AVX2 where the CPU has it)
 /// without gathering their 200-byte records: by `perf`, the test was 9 % of a step of those
 /// cubes, 5 % since (a pair asks it of 7 candidates on average, and 90 % of the pairs asked
-/// are not severed). Kept out of the pass's own frame: with the candidates in an array there
-/// (of 32 entries, or even of one), the conventional cubes, where nothing fails, ran about 15 %
-/// slower.
+/// are not severed). Since 2026-11-28 each pair is asked once, before the pass, and the pass
+/// reads each particle's few severed pairs by their slots ([`CrackLists::find_severed`]): in a
+/// window of those cubes (steps 100–160, one thread, `perf`) the test fell from 233 to 122
+/// samples, and the pass, which no longer called [`cut_pair`] for every pair beside a crack
+/// to be told "not severed", from 2048 to 1701, against 187 for the new search. Kept out of
+/// the pass's own frame: with the candidates in an array there (of 32 entries, or even of
+/// one), the conventional cubes, where nothing fails, ran about 15 % slower.
 #[derive(Debug, Clone)]
 struct CrackLists<const D: usize> {
     /// ends[i]: where particle i's candidates end (they start at ends[i − 1]).
@@ -1185,6 +1239,11 @@ struct CrackLists<const D: usize> {
     /// (ghosts and another rank's particles, whose pairs then take the test in full). A pair
     /// of intact particles can be severed only where both are.
     cracked: Vec<bool>,
+    /// The severed pairs of each particle with a list here ([`CrackLists::severed`]):
+    /// `severed_ends[i]` ends i's entries in `severed`, each the pair's slot in i's list and
+    /// whether the crack is open.
+    severed_ends: Vec<u32>,
+    severed: Vec<(u32, bool)>,
     /// Whether [`CrackLists::severs`] runs on 256-bit vectors ([`wide_lanes`]).
     wide: bool,
 }
@@ -1199,6 +1258,8 @@ impl<const D: usize> Default for CrackLists<D> {
             reach2: Vec::new(),
             p: Vec::new(),
             cracked: Vec::new(),
+            severed_ends: Vec::new(),
+            severed: Vec::new(),
             wide: false,
         }
     }
@@ -1285,6 +1346,90 @@ impl<const D: usize> CrackLists<D> {
                 .map(|i| !failed(i) && (i >= n || !nl.listed(i) || !self.range(i).is_empty())),
         );
         self.cracked = cracked;
+        self.find_severed(n, gather, nl, model);
+    }
+
+    /// Particle i's severed pairs: the slots of its list (increasing) whose neighbour is intact,
+    /// met through the conservation equations in the pass ([`meets_in_pass`]) and severed
+    /// ([`CrackLists::severs`]), with whether the crack is open. Empty for a failed particle.
+    #[inline]
+    fn severed(&self, i: usize) -> &[(u32, bool)] {
+        match self.severed_ends.get(i) {
+            Some(&end) => {
+                let start = if i == 0 { 0 } else { self.severed_ends[i - 1] };
+                &self.severed[start as usize..end as usize]
+            }
+            None => &[],
+        }
+    }
+
+    /// Every severed pair of intact particles, tested once: from its lower index's side, or
+    /// from the side that has a list where the other has none here (a ghost, another rank's
+    /// particle), and entered in the lists of both (of each that has one). The pass used to
+    /// test each pair from both sides as it met it; both answer the same
+    /// ([`CrackLists::severs`]), and nine pairs in ten were not severed. The results are
+    /// those of testing in the pass, to the bit: the same answers, cut in the same order.
+    fn find_severed(
+        &mut self,
+        n: usize,
+        gather: &[Gather<D>],
+        nl: &NeighborList,
+        model: &Model<D>,
+    ) {
+        const BLOCK: usize = 4096;
+        let has_list = |k: usize| k < n && nl.listed(k);
+        let joined = |a: u32, b: u32| joined(model, a, b);
+        let this = &*self;
+        // (i, the pair's slot in i's list, j, open), in order of i and then of the slot.
+        let blocks: Vec<Vec<(u32, u32, u32, bool)>> = (0..n.div_ceil(BLOCK))
+            .into_par_iter()
+            .map(|b| {
+                let mut hits = Vec::new();
+                for i in b * BLOCK..((b + 1) * BLOCK).min(n) {
+                    // A particle with candidates is intact and has its list here.
+                    if this.range(i).is_empty() {
+                        continue;
+                    }
+                    let gi = &gather[i];
+                    for (slot, &j) in nl.list(i).iter().enumerate() {
+                        let ju = j as usize;
+                        if (ju < i && has_list(ju)) || !this.cracked[ju] {
+                            continue;
+                        }
+                        if !meets_in_pass(model, gi, &gather[ju]) {
+                            continue;
+                        }
+                        if let Some(open) = this.severs((i, ju), gather, joined) {
+                            hits.push((i as u32, slot as u32, j, open));
+                        }
+                    }
+                }
+                hits
+            })
+            .collect();
+        // Each hit in i's entries and, at i's slot in j's list, in j's (the lists are in
+        // increasing index).
+        let mut entries: Vec<(u32, u32, bool)> = Vec::new();
+        for &(i, slot, j, open) in blocks.iter().flatten() {
+            entries.push((i, slot, open));
+            if has_list(j as usize) {
+                let back = nl
+                    .list(j as usize)
+                    .binary_search(&i)
+                    .expect("a pair within the support is in both lists");
+                entries.push((j, back as u32, open));
+            }
+        }
+        entries.sort_unstable_by_key(|&(k, slot, _)| (k, slot));
+        self.severed_ends.clear();
+        self.severed.clear();
+        let mut e = entries.iter().peekable();
+        for k in 0..n as u32 {
+            while let Some(&(_, slot, open)) = e.next_if(|x| x.0 == k) {
+                self.severed.push((slot, open));
+            }
+            self.severed_ends.push(self.severed.len() as u32);
+        }
     }
 
     /// Beside each of `items`, what [`CrackLists::severs`] reads of it.
@@ -1420,6 +1565,27 @@ impl<const D: usize> CrackLists<D> {
     }
 }
 
+/// Whether the pass meets the pair (i, j) of intact particles through the conservation
+/// equations: j within i's support (r² and the support as [`particle_rates`] computes them, the
+/// same bits from either side), of i's body or welded to it, or a wall's image pressed against
+/// i ([`pressed`]); not a pair in contact.
+fn meets_in_pass<const D: usize>(model: &Model<D>, gi: &Gather<D>, gj: &Gather<D>) -> bool {
+    let xij: [f64; D] = std::array::from_fn(|k| gi.x[k] - gj.x[k]);
+    let r2 = dot(&xij, &xij);
+    let support = gi.h + gj.h;
+    if !(r2 < support * support && r2 > 0.0) {
+        return false;
+    }
+    if gi.body == gj.body {
+        return true;
+    }
+    match model.pairs.rule(gi.body, gj.body) {
+        PairRule::Conserve => true,
+        PairRule::Contact(_) => false,
+        PairRule::Wall => pressed(gi, gj, &xij),
+    }
+}
+
 /// Whether a particle and a wall's image of a particle are pressed together: the pair closes
 /// (v_ij·x_ij < 0), or its stress along the line between them, x̂_ij·(σ_i + σ_j)·x̂_ij, is
 /// compressive. The same answer from either side, and for the mirrored pair (j, image of i).
@@ -1451,27 +1617,23 @@ fn joined<const D: usize>(model: &Model<D>, a: u32, b: u32) -> bool {
 /// not the particle's own strain. Where the failed particle is compressed, the rubble carries
 /// the load and deforms with its neighbours, and the pair stays in both. A failed particle
 /// keeps its pairs in both, so that its density follows its neighbours apart as well as
-/// together. Adds to `cuts` what the pair takes out of i's sums (nothing for a pair in full).
+/// together. Adds to `cuts` what the pair takes out of i's sums; `kind`: why it is cut.
 #[inline(never)]
 #[allow(clippy::needless_range_loop)] // index loops over axes read as the equations
 fn cut_pair<const D: usize, K: Kernel, const CN: bool>(
     kernel: K,
     (i, j): (usize, usize),
     xij: &[f64; D],
+    kind: CutKind,
     pass: &Pass<D>,
     cuts: &mut Cut<D>,
 ) {
     let (gi, gj) = (&pass.gather[i], &pass.gather[j]);
-    let open = if gi.failed {
-        false
-    } else if gj.failed {
-        pass.pressure[j] <= 0.0
-    } else {
-        let joined = |a: u32, b: u32| joined(pass.model, a, b);
-        match pass.cracks.severs((i, j), pass.gather, joined) {
-            Some(open) => open,
-            None => return,
-        }
+    debug_assert!(gi.failed || gj.failed || kind != CutKind::Member);
+    let open = match kind {
+        CutKind::Member => !gi.failed && gj.failed && pass.pressure[j] <= 0.0,
+        CutKind::Closed => false,
+        CutKind::Open => true,
     };
     // The kernel's gradient factor, shared by the two terms.
     let r = dot(xij, xij).sqrt();
@@ -1769,7 +1931,8 @@ mod tests {
 
     /// The crack candidates ([`CrackLists`]) sever exactly the pairs that the whole neighbour
     /// list does, and a pair of intact particles is severed only where both are `cracked`;
-    /// a particle with no list here (another rank's) counts as cracked.
+    /// a particle with no list here (another rank's) counts as cracked. Each particle's
+    /// severed pairs found before the pass are exactly these, at their slots.
     #[test]
     fn crack_candidates_sever_what_the_whole_list_does() {
         let (mut p, model) = elastic_block();
@@ -1811,7 +1974,10 @@ mod tests {
                 continue;
             }
             listed += 1;
-            for &j in nl.list(i) {
+            // The pairs found before the pass, by slot ([`CrackLists::severed`]), found from
+            // either side (or from i's alone where j has no list).
+            let mut found = cracks.severed(i).iter();
+            for (slot, &j) in nl.list(i).iter().enumerate() {
                 let j = j as usize;
                 if gather[j].failed || !within_support(&gather[i], &gather[j]) {
                     continue;
@@ -1819,11 +1985,14 @@ mod tests {
                 let whole = severed_by_definition((i, j), nl.list(i), &gather, joined, &p.p);
                 let few = cracks.severs((i, j), &gather, joined);
                 assert_eq!(whole, few, "pair ({i}, {j})");
-                if whole.is_some() {
+                if let Some(open) = whole {
                     severed_pairs += 1;
                     assert!(cracks.cracked[i] && cracks.cracked[j], "pair ({i}, {j})");
+                    assert!(meets_in_pass(&model, &gather[i], &gather[j]));
+                    assert_eq!(found.next(), Some(&(slot as u32, open)), "pair ({i}, {j})");
                 }
             }
+            assert_eq!(found.next(), None, "{i}: no other pair is severed");
         }
         assert!(
             listed > 0 && severed_pairs > 20,
