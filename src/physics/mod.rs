@@ -737,44 +737,25 @@ fn particle_rates<const D: usize, K: Kernel, const ART: bool, const CN: bool>(
             gj.failed
         }
     };
-    // The pairs with a failed member to cut, by their slots in the list, queued without a
-    // branch on whether j is in the support or has failed; and an intact i's severed pairs,
-    // found before the pass ([`CrackLists::severed`]). Both are cut in list order (the same sums
-    // as cutting each at once).
+    // The pairs with a failed member to cut, queued without a branch on whether j is in the
+    // support or has failed; and an intact i's severed pairs, found before the pass
+    // ([`CrackLists::severed`]). Both are cut in list order, which is the neighbours' index
+    // order (the same sums as cutting each at once).
     let severed = pass.cracks.severed(i);
     let mut met = 0;
     let mut cut_queue = [0u32; BATCH];
     let mut cut_queued = 0;
-    // The queued pairs, and the severed pairs before slot `upto`, merged in slot order.
+    // The queued pairs, and the severed pairs with a neighbour below `upto`.
     macro_rules! cut_before {
-        ($upto:expr) => {{
-            let upto: u32 = $upto;
-            let mut q = 0;
-            loop {
-                let member = if q < cut_queued {
-                    cut_queue[q]
-                } else {
-                    u32::MAX
-                };
-                let sever = match severed.get(met) {
-                    Some(&(slot, _)) if slot < upto => slot,
-                    _ => u32::MAX,
-                };
-                if member == u32::MAX && sever == u32::MAX {
-                    break;
-                }
-                let (slot, kind) = if sever < member {
-                    met += 1;
-                    (sever, CutKind::severed(severed[met - 1].1))
-                } else {
-                    q += 1;
-                    (member, CutKind::Member)
-                };
-                let j = neighbors[slot as usize] as usize;
-                let xij: [f64; D] = std::array::from_fn(|k| xi[k] - gather[j].x[k]);
-                cut_pair::<D, K, CN>(kernel, (i, j), &xij, kind, pass, &mut cuts);
-            }
-        }};
+        ($upto:expr) => {
+            cut_in_order::<D, K, CN>(
+                kernel,
+                i,
+                (&cut_queue[..cut_queued], severed, &mut met, $upto),
+                pass,
+                &mut cuts,
+            )
+        };
     }
 
     // CN-SPH: the correction pass has marked the list's entries in the support (a particle
@@ -789,14 +770,13 @@ fn particle_rates<const D: usize, K: Kernel, const ART: bool, const CN: bool>(
         for (w, &word) in mask.iter().enumerate() {
             let mut bits = word;
             while bits != 0 {
-                let slot = 64 * w + bits.trailing_zeros() as usize;
-                let j = neighbors[slot];
+                let j = neighbors[64 * w + bits.trailing_zeros() as usize];
                 bits &= bits - 1;
                 if pass.any_failed {
-                    cut_queue[cut_queued] = slot as u32;
+                    cut_queue[cut_queued] = j;
                     cut_queued += cuttable(&gather[j as usize]) as usize;
                     if cut_queued == BATCH {
-                        cut_before!(slot as u32 + 1);
+                        cut_before!(j + 1);
                         cut_queued = 0;
                     }
                 }
@@ -806,7 +786,7 @@ fn particle_rates<const D: usize, K: Kernel, const ART: bool, const CN: bool>(
     }
     // Otherwise the whole list, skin included, through the filter.
     let unmarked = if marked.is_some() { &[][..] } else { neighbors };
-    for (slot, &j) in unmarked.iter().enumerate() {
+    for &j in unmarked {
         let gj = &gather[j as usize];
         let xij: [f64; D] = std::array::from_fn(|k| xi[k] - gj.x[k]);
         let r2 = dot(&xij, &xij);
@@ -941,17 +921,19 @@ fn particle_rates<const D: usize, K: Kernel, const ART: bool, const CN: bool>(
             }
         }
         if pass.any_failed {
-            cut_queue[cut_queued] = slot as u32;
+            cut_queue[cut_queued] = j;
             cut_queued += (inside & cuttable(gj)) as usize;
             if cut_queued == BATCH {
-                cut_before!(slot as u32 + 1);
+                cut_before!(j + 1);
                 cut_queued = 0;
             }
         }
         queue!(j, inside);
     }
-    cut_before!(u32::MAX);
-    debug_assert_eq!(met, severed.len(), "particle {i} cut every severed pair");
+    if pass.any_failed {
+        cut_before!(u32::MAX);
+        debug_assert_eq!(met, severed.len(), "particle {i} cut every severed pair");
+    }
     count += queued as u32;
     let used = queued.div_ceil(LANES) * LANES;
     queue[queued..used].fill(padding);
@@ -1167,6 +1149,41 @@ fn finish_corrected<const D: usize>(b: &Tensor<D>, rho: f64, g: &Tensor<D>) -> (
     (-rho * l.trace(), l)
 }
 
+/// Cuts the pairs of i with a failed member, `members` (neighbours in increasing index), and
+/// its severed pairs from the `met`-th on whose neighbour is below `upto`, merged in the
+/// neighbours' order ([`cut_pair`]); `met` moves past the severed pairs cut.
+#[inline(never)]
+fn cut_in_order<const D: usize, K: Kernel, const CN: bool>(
+    kernel: K,
+    i: usize,
+    (members, severed, met, upto): (&[u32], &[(u32, bool)], &mut usize, u32),
+    pass: &Pass<D>,
+    cuts: &mut Cut<D>,
+) {
+    let gather = pass.gather;
+    let xi = gather[i].x;
+    let mut q = 0;
+    loop {
+        let member = members.get(q).copied().unwrap_or(u32::MAX);
+        let sever = match severed.get(*met) {
+            Some(&(j, _)) if j < upto => j,
+            _ => u32::MAX,
+        };
+        if member == u32::MAX && sever == u32::MAX {
+            break;
+        }
+        let (j, kind) = if sever < member {
+            *met += 1;
+            (sever as usize, CutKind::severed(severed[*met - 1].1))
+        } else {
+            q += 1;
+            (member as usize, CutKind::Member)
+        };
+        let xij: [f64; D] = std::array::from_fn(|k| xi[k] - gather[j].x[k]);
+        cut_pair::<D, K, CN>(kernel, (i, j), &xij, kind, pass, cuts);
+    }
+}
+
 /// Why a pair is cut ([`cut_pair`]): a failed member, or a failed particle between two intact
 /// ones with the crack closed or open ([`CrackLists::severs`]).
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -1218,7 +1235,7 @@ impl<const D: usize> Default for Cut<D> {
 /// without gathering their 200-byte records: by `perf`, the test was 9 % of a step of those
 /// cubes, 5 % since (a pair asks it of 7 candidates on average, and 90 % of the pairs asked
 /// are not severed). Since 2026-11-28 each pair is asked once, before the pass, and the pass
-/// reads each particle's few severed pairs by their slots ([`CrackLists::find_severed`]): in a
+/// cuts each particle's few severed pairs in list order ([`CrackLists::find_severed`]): in a
 /// window of those cubes (steps 100–160, one thread, `perf`) the test fell from 233 to 122
 /// samples, and the pass, which no longer called [`cut_pair`] for every pair beside a crack
 /// to be told "not severed", from 2048 to 1701, against 187 for the new search. Kept out of
@@ -1240,8 +1257,8 @@ struct CrackLists<const D: usize> {
     /// of intact particles can be severed only where both are.
     cracked: Vec<bool>,
     /// The severed pairs of each particle with a list here ([`CrackLists::severed`]):
-    /// `severed_ends[i]` ends i's entries in `severed`, each the pair's slot in i's list and
-    /// whether the crack is open.
+    /// `severed_ends[i]` ends i's entries in `severed`, each the other particle and whether the
+    /// crack is open.
     severed_ends: Vec<u32>,
     severed: Vec<(u32, bool)>,
     /// Whether [`CrackLists::severs`] runs on 256-bit vectors ([`wide_lanes`]).
@@ -1349,9 +1366,10 @@ impl<const D: usize> CrackLists<D> {
         self.find_severed(n, gather, nl, model);
     }
 
-    /// Particle i's severed pairs: the slots of its list (increasing) whose neighbour is intact,
-    /// met through the conservation equations in the pass ([`meets_in_pass`]) and severed
-    /// ([`CrackLists::severs`]), with whether the crack is open. Empty for a failed particle.
+    /// Particle i's severed pairs: the neighbours (in increasing index, the list's order) that
+    /// are intact, met through the conservation equations in the pass ([`meets_in_pass`]) and
+    /// severed ([`CrackLists::severs`]), with whether the crack is open. Empty for a failed
+    /// particle.
     #[inline]
     fn severed(&self, i: usize) -> &[(u32, bool)] {
         match self.severed_ends.get(i) {
@@ -1380,8 +1398,8 @@ impl<const D: usize> CrackLists<D> {
         let has_list = |k: usize| k < n && nl.listed(k);
         let joined = |a: u32, b: u32| joined(model, a, b);
         let this = &*self;
-        // (i, the pair's slot in i's list, j, open), in order of i and then of the slot.
-        let blocks: Vec<Vec<(u32, u32, u32, bool)>> = (0..n.div_ceil(BLOCK))
+        // (i, j, open), in order of i and then of j.
+        let blocks: Vec<Vec<(u32, u32, bool)>> = (0..n.div_ceil(BLOCK))
             .into_par_iter()
             .map(|b| {
                 let mut hits = Vec::new();
@@ -1391,7 +1409,7 @@ impl<const D: usize> CrackLists<D> {
                         continue;
                     }
                     let gi = &gather[i];
-                    for (slot, &j) in nl.list(i).iter().enumerate() {
+                    for &j in nl.list(i) {
                         let ju = j as usize;
                         if (ju < i && has_list(ju)) || !this.cracked[ju] {
                             continue;
@@ -1400,33 +1418,28 @@ impl<const D: usize> CrackLists<D> {
                             continue;
                         }
                         if let Some(open) = this.severs((i, ju), gather, joined) {
-                            hits.push((i as u32, slot as u32, j, open));
+                            hits.push((i as u32, j, open));
                         }
                     }
                 }
                 hits
             })
             .collect();
-        // Each hit in i's entries and, at i's slot in j's list, in j's (the lists are in
-        // increasing index).
+        // Each hit in the entries of both.
         let mut entries: Vec<(u32, u32, bool)> = Vec::new();
-        for &(i, slot, j, open) in blocks.iter().flatten() {
-            entries.push((i, slot, open));
+        for &(i, j, open) in blocks.iter().flatten() {
+            entries.push((i, j, open));
             if has_list(j as usize) {
-                let back = nl
-                    .list(j as usize)
-                    .binary_search(&i)
-                    .expect("a pair within the support is in both lists");
-                entries.push((j, back as u32, open));
+                entries.push((j, i, open));
             }
         }
-        entries.sort_unstable_by_key(|&(k, slot, _)| (k, slot));
+        entries.sort_unstable_by_key(|&(k, other, _)| (k, other));
         self.severed_ends.clear();
         self.severed.clear();
         let mut e = entries.iter().peekable();
         for k in 0..n as u32 {
-            while let Some(&(_, slot, open)) = e.next_if(|x| x.0 == k) {
-                self.severed.push((slot, open));
+            while let Some(&(_, other, open)) = e.next_if(|x| x.0 == k) {
+                self.severed.push((other, open));
             }
             self.severed_ends.push(self.severed.len() as u32);
         }
@@ -1932,7 +1945,7 @@ mod tests {
     /// The crack candidates ([`CrackLists`]) sever exactly the pairs that the whole neighbour
     /// list does, and a pair of intact particles is severed only where both are `cracked`;
     /// a particle with no list here (another rank's) counts as cracked. Each particle's
-    /// severed pairs found before the pass are exactly these, at their slots.
+    /// severed pairs found before the pass are exactly these, in the list's order.
     #[test]
     fn crack_candidates_sever_what_the_whole_list_does() {
         let (mut p, model) = elastic_block();
@@ -1974,10 +1987,10 @@ mod tests {
                 continue;
             }
             listed += 1;
-            // The pairs found before the pass, by slot ([`CrackLists::severed`]), found from
-            // either side (or from i's alone where j has no list).
+            // The pairs found before the pass ([`CrackLists::severed`]), found from either side
+            // (or from i's alone where j has no list), in the list's order.
             let mut found = cracks.severed(i).iter();
-            for (slot, &j) in nl.list(i).iter().enumerate() {
+            for &j in nl.list(i) {
                 let j = j as usize;
                 if gather[j].failed || !within_support(&gather[i], &gather[j]) {
                     continue;
@@ -1989,7 +2002,7 @@ mod tests {
                     severed_pairs += 1;
                     assert!(cracks.cracked[i] && cracks.cracked[j], "pair ({i}, {j})");
                     assert!(meets_in_pass(&model, &gather[i], &gather[j]));
-                    assert_eq!(found.next(), Some(&(slot as u32, open)), "pair ({i}, {j})");
+                    assert_eq!(found.next(), Some(&(j as u32, open)), "pair ({i}, {j})");
                 }
             }
             assert_eq!(found.next(), None, "{i}: no other pair is severed");
