@@ -1236,9 +1236,9 @@ impl<const D: usize> Default for Cut<D> {
 /// cubes, 5 % since (a pair asks it of 7 candidates on average, and 90 % of the pairs asked
 /// are not severed). Since 2026-11-28 each pair is asked once, before the pass, and the pass
 /// cuts each particle's few severed pairs in list order ([`CrackLists::find_severed`]): in a
-/// window of those cubes (steps 100–160, one thread, `perf`) the test fell from 233 to 122
-/// samples, and the pass, which no longer called [`cut_pair`] for every pair beside a crack
-/// to be told "not severed", from 2048 to 1701, against 187 for the new search. Kept out of
+/// window of those cubes (steps 100–160, one thread, `perf` at 2 kHz) the test fell from 233
+/// to 127 samples, and the pass, which no longer called [`cut_pair`] for every pair beside a
+/// crack to be told "not severed", from 2048 to 1711, against 177 for the new search. Kept out of
 /// the pass's own frame: with the candidates in an array there (of 32 entries, or even of
 /// one), the conventional cubes, where nothing fails, ran about 15 % slower.
 #[derive(Debug, Clone)]
