@@ -218,8 +218,9 @@ fn cubes_3d_cn() -> String {
 
 /// The cubes as 4340 steel at ±300 m/s (an 11 GPa shock: every particle behind it yields),
 /// with the library's Johnson–Cook strength and its failure (Johnson–Cook D1–D5 and spall):
-/// the cost of the material models, against [`cubes_3d_vm`].
-fn cubes_3d_jc() -> String {
+/// the cost of the material models, against [`cubes_3d_vm`]. Also the MPI tests' case with
+/// failure (`tests/mpi.rs`).
+pub fn cubes_3d_jc() -> String {
     steel_cubes("cubes_3d_jc", "library = \"steel_4340\"")
 }
 

@@ -221,42 +221,17 @@ fn a_contact_case_on_1_2_3_ranks_is_the_serial_run_bit_for_bit() {
     ranks_match_serial("hertz_spheres", 1.0e-3, 120);
 }
 
-/// Two 4340 steel cubes at ±300 m/s with the library's Johnson–Cook strength and failure
-/// (`strike bench`'s `cubes_3d_jc`): an 11 GPa shock, and over 2000 of the 16 000 particles
-/// failed by step 250.
-const STEEL_CUBES: &str = r#"
-[simulation]
-name = "steel_cubes"
-dimension = 3
-end_time = 2.0e-5
-[materials.steel]
-library = "steel_4340"
-[[body]]
-name = "left"
-material = "steel"
-spacing = 1.0e-3
-velocity = [300.0, 0.0, 0.0]
-shape = { type = "box", min = [-0.02, 0.0, 0.0], max = [0.0, 0.02, 0.02] }
-[[body]]
-name = "right"
-material = "steel"
-spacing = 1.0e-3
-velocity = [-300.0, 0.0, 0.0]
-shape = { type = "box", min = [0.001, 0.0, 0.0], max = [0.021, 0.02, 0.02] }
-[output]
-snapshot_interval = 5.0e-6
-"#;
-
 /// Failure across the ranks' boundaries: pairs with a failed member cut, pairs of intact
 /// particles severed by a failed one between them (`physics::CrackLists`, found once a pair
 /// from whichever side has a list on the rank), the same bit for bit on 1, 2 and 3 ranks as
-/// serially.
+/// serially. The case is `strike bench`'s Johnson–Cook steel cubes (16 000 particles, an
+/// 11 GPa shock), over 2000 particles failed by step 250.
 #[test]
 fn failure_on_1_2_3_ranks_is_the_serial_run_bit_for_bit() {
-    let d = dir("steel_cubes");
-    let deck = d.join("steel_cubes.toml");
-    std::fs::write(&deck, STEEL_CUBES).unwrap();
-    deck_matches_serial(&deck, "steel_cubes", &d, 250);
+    let d = dir("cubes_3d_jc");
+    let deck = d.join("cubes_3d_jc.toml");
+    std::fs::write(&deck, strike::bench::cubes_3d_jc()).unwrap();
+    deck_matches_serial(&deck, "cubes_3d_jc", &d, 250);
     // The run does fail: the history's last row counts the failed particles.
     let history = std::fs::read_to_string(d.join("serial/history.csv")).unwrap();
     let mut rows = history.lines();
