@@ -173,50 +173,33 @@ fn mirror<const D: usize>(p: &mut Particles<D>, range: Range<usize>, plane: &Pla
         .par_iter_mut()
         .with_min_len(MIN)
         .for_each(|x| x[k] = 2.0 * c - x[k]);
-    for field in [
-        &mut p.v,
-        &mut p.vh,
-        &mut p.a,
-        &mut p.u,
-        &mut p.contact_force,
-    ] {
+    for field in [&mut p.v, &mut p.vh, &mut p.a, &mut p.contact_force] {
         field[r.clone()]
             .par_iter_mut()
             .with_min_len(MIN)
             .for_each(|v| v[k] = -v[k]);
     }
-    p.dv[r.clone()]
-        .par_iter_mut()
-        .with_min_len(MIN)
-        .for_each(|v| v[k] = -v[k]);
+    for field in [&mut p.u, &mut p.dv] {
+        field[r.clone()]
+            .par_iter_mut()
+            .with_min_len(MIN)
+            .for_each(|v| v[k] = -v[k]);
+    }
     p.s[r.clone()]
         .par_iter_mut()
         .with_min_len(MIN)
-        .for_each(|s| mirror_tensor(s, k));
+        .for_each(|s| s.mirror(k));
     p.strain_rate[r]
         .par_iter_mut()
         .with_min_len(MIN)
-        .for_each(|s| mirror_tensor(s, k));
-}
-
-/// A tensor seen in the mirror of the plane normal to axis k: M T M with M = I − 2 e_k e_kᵀ,
-/// the components with one index k change sign.
-fn mirror_tensor<T: nalgebra::Scalar + Copy + std::ops::Neg<Output = T>, const D: usize>(
-    t: &mut nalgebra::SMatrix<T, D, D>,
-    k: usize,
-) {
-    for l in 0..D {
-        if l != k {
-            t[(k, l)] = -t[(k, l)];
-            t[(l, k)] = -t[(l, k)];
-        }
-    }
+        .for_each(|s| s.mirror(k));
 }
 
 #[cfg(test)]
 mod tests {
     use super::*;
     use crate::particles::{Tensor, Vector};
+    use crate::tensor::Sym;
 
     #[test]
     fn quarter_model_corner_gets_three_ghosts() {
@@ -229,7 +212,9 @@ mod tests {
             0.5,
             0,
         );
-        p.s[0] = Tensor::<3>::new(1.0, 2.0, 3.0, 2.0, 4.0, 5.0, 3.0, 5.0, -5.0);
+        p.s[0] = Sym::from_full(&Tensor::<3>::new(
+            1.0, 2.0, 3.0, 2.0, 4.0, 5.0, 3.0, 5.0, -5.0,
+        ));
         let planes = [
             Plane {
                 axis: 0,
@@ -252,7 +237,9 @@ mod tests {
         assert_eq!(p.v[3], Vector::<3>::new(-1.0, -2.0, 3.0));
         assert_eq!(
             p.s[3],
-            Tensor::<3>::new(1.0, 2.0, -3.0, 2.0, 4.0, -5.0, -3.0, -5.0, -5.0)
+            Sym::from_full(&Tensor::<3>::new(
+                1.0, 2.0, -3.0, 2.0, 4.0, -5.0, -3.0, -5.0, -5.0
+            ))
         );
         // Rebuilding replaces the ghosts, it does not add to them.
         rebuild_ghosts(&mut p, &planes);
@@ -287,7 +274,7 @@ mod tests {
             0.5,
             0,
         );
-        p.s[0] = Tensor::<2>::new(1.0, 2.0, 2.0, -1.0);
+        p.s[0] = Sym::from_full(&Tensor::<2>::new(1.0, 2.0, 2.0, -1.0));
         let planes = [Plane {
             axis: 0,
             position: 0.0,
@@ -297,7 +284,7 @@ mod tests {
         reflect_crossed(&mut p, &planes);
         assert_eq!(p.x[0], Vector::<2>::new(0.1, 1.0));
         assert_eq!(p.vh[0], Vector::<2>::new(2.0, 3.0));
-        assert_eq!(p.s[0], Tensor::<2>::new(1.0, -2.0, -2.0, -1.0));
+        assert_eq!(p.s[0].full(), Tensor::<2>::new(1.0, -2.0, -2.0, -1.0));
         // The particle on the model's side is left alone.
         assert_eq!(p.x[1], Vector::<2>::new(0.3, 1.0));
     }

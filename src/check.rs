@@ -54,8 +54,8 @@ pub fn output_plan(case: &Case, n: usize) -> OutputPlan {
         .map_or(0.0, |i| (end / i).floor());
     let snapshots = (by_interval + 2.0).min(u64::MAX as f64) as u64;
     let snapshot_bytes = crate::output::vtk::snapshot_bytes(n) as f64;
-    // The particle fields as the checkpoint writes them: 280 bytes a particle in 2D, 432 in 3D.
-    let checkpoint_bytes = n as f64 * if case.dimension == 2 { 280.0 } else { 432.0 };
+    // The particle fields as the checkpoint writes them: 272 bytes a particle in 2D, 360 in 3D.
+    let checkpoint_bytes = n as f64 * if case.dimension == 2 { 272.0 } else { 360.0 };
     OutputPlan {
         snapshots,
         snapshot_bytes,

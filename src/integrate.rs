@@ -52,9 +52,9 @@ use crate::material::{radial_return, DamageState, Damaged};
 use crate::particles::{Particles, Tensor, Vector};
 use crate::physics::{Model, Rates};
 use crate::tensor::{
-    equivalent_strain_rate, max_principal, max_principal_bound, out_of_plane, von_mises,
+    equivalent_strain_rate, max_principal, max_principal_bound, out_of_plane, von_mises, Sym,
 };
-use nalgebra::{SMatrix, SVector};
+use nalgebra::SVector;
 use rayon::prelude::*;
 
 /// Predict v^n = v^{n−½} + ½ Δt_{n−1} a^{n−1} for the real particles (prescribed bodies keep
@@ -238,7 +238,7 @@ pub fn advance<const D: usize>(
                         *dv = ((*a * 1.5 - a_old) * dt).cast::<f32>();
                     }
                 }
-                *u = ((v_old + *vh) * 0.5 - v_pred[i]) * kick;
+                *u = (((v_old + *vh) * 0.5 - v_pred[i]) * kick).cast::<f32>();
                 *x += *vh * dt;
                 *eh += rates.particles[i].de * kick + rates.particles[i].de_lag;
                 *e = *eh + rates.particles[i].de * (0.5 * dt);
@@ -250,33 +250,35 @@ pub fn advance<const D: usize>(
                 if mat.strength.reference_shear_modulus() > 0.0 {
                     let st = mat.strength_state(*rho, *e, (*eps_p, *w_p), rate, p_eos);
                     let g = mat.strength.shear_modulus(&st);
-                    let trial = *s + jaumann_rate(s, grad_v, g) * dt;
+                    let s_old = s.full();
+                    let trial = s_old + jaumann_rate(&s_old, grad_v, g) * dt;
                     let damaged = Damaged {
                         inner: mat.strength.as_ref(),
                         keep: mat.carried(*dmg),
                     };
                     let (s_new, d) = radial_return(&trial, &st, &damaged);
-                    *s = s_new;
+                    *s = Sym::from_full(&s_new);
                     d_eps = d;
                     *eps_p += d;
                     // The work of the flow stress on the plastic strain (the return ends on the
                     // yield surface: σ_eq = Y).
-                    *w_p += von_mises(s) * d / *rho;
+                    *w_p += von_mises(&s_new) * d / *rho;
                 }
                 // What the viscosity's limiter reads of the particle's flow: its strain rate,
                 // or none once it has flowed plastically, so that its pairs keep the plain
                 // viscosity (`physics::viscosity::limited`, "Elastic material only").
                 *sr = if *eps_p > 0.0 {
-                    SMatrix::<f32, D, D>::zeros()
+                    Sym::zeros()
                 } else {
-                    ((grad_v + grad_v.transpose()) * 0.5).cast::<f32>()
+                    Sym::from_full(&((grad_v + grad_v.transpose()) * 0.5).cast::<f32>())
                 };
                 // Most particles at most steps grow no damage: they are told by a bound of σ1,
                 // before the eigenvalue and the temperature are computed; and where only the
                 // plastic strain's models act, σ1 is left at its bound (see `DamageState`).
                 if !mat.damage.is_empty() && *dmg < 1.0 {
-                    let sigma = *s - Tensor::<D>::identity() * p_eos;
-                    let zz = out_of_plane(s) - p_eos;
+                    let s_full = s.full();
+                    let sigma = s_full - Tensor::<D>::identity() * p_eos;
+                    let zz = out_of_plane(&s_full) - p_eos;
                     let bound = max_principal_bound(&sigma, zz);
                     let idle = |b: f64, d: f64| mat.damage.iter().all(|model| model.idle(b, d));
                     if !idle(bound, d_eps) {
@@ -288,7 +290,7 @@ pub fn advance<const D: usize>(
                                 max_principal(&sigma, zz)
                             },
                             p: p_eos,
-                            sigma_eq: von_mises(s),
+                            sigma_eq: von_mises(&s_full),
                             d_eps_p: d_eps,
                             rate,
                             t_star: mat.strength.homologous_temperature(&st),
@@ -300,14 +302,15 @@ pub fn advance<const D: usize>(
                             *dmg = model.grow(&state, *dmg, dt);
                         }
                         if *dmg >= 1.0 {
-                            *s = Tensor::<D>::zeros();
+                            *s = Sym::zeros();
                         }
                     }
                 }
                 // b stays the identity (λ_max = 1) in a material that does not flow.
                 let lambda_max = if mat.flows {
-                    *bb = stretch_step(bb, grad_v, dt);
-                    largest_stretch(bb)
+                    let b_new = stretch_step(&bb.full(), grad_v, dt);
+                    *bb = Sym::from_full(&b_new);
+                    largest_stretch(&bb.full())
                 } else {
                     1.0
                 };

@@ -3,6 +3,7 @@
 //! Real particles come first (`0..n_real`); symmetry-plane ghosts, rebuilt every step by
 //! `boundary`, follow them. Physics loops run over real particles and read ghosts as neighbours.
 
+use crate::tensor::Sym;
 use nalgebra::{SMatrix, SVector};
 use rayon::prelude::*;
 
@@ -57,8 +58,9 @@ pub struct Particles<const D: usize> {
     /// Acceleration of the last step (m/s²), for the velocity predictor.
     pub a: Vec<Vector<D>>,
     /// Energy-correction displacement u = (v̄ − v_pred) Δt of the last step (m), v̄ the mean of
-    /// the half-step velocities: see `integrate` (lagged energy correction).
-    pub u: Vec<Vector<D>>,
+    /// the half-step velocities: see `integrate` (lagged energy correction). In single
+    /// precision, as the rate pass reads it (`physics::Gather`).
+    pub u: Vec<SVector<f32, D>>,
     /// Mass m (kg).
     pub m: Vec<f64>,
     /// Density ρ (kg/m³).
@@ -73,8 +75,9 @@ pub struct Particles<const D: usize> {
     /// Sound speed c = √((K_s + 4G/3)/ρ) (m/s).
     pub c: Vec<f64>,
     /// Deviatoric stress S (Pa). In 2D plane strain the stored 2×2 block is the in-plane part and
-    /// S_zz = −(S_xx + S_yy) (see [`crate::tensor::out_of_plane`]).
-    pub s: Vec<Tensor<D>>,
+    /// S_zz = −(S_xx + S_yy) (see [`crate::tensor::out_of_plane`]). Symmetric: one triangle
+    /// is kept ([`Sym`]).
+    pub s: Vec<Sym<f64, D>>,
     /// Smoothing length h (m) and its initial value h0.
     pub h: Vec<f64>,
     pub h0: Vec<f64>,
@@ -86,7 +89,7 @@ pub struct Particles<const D: usize> {
     /// The left Cauchy–Green tensor b = F Fᵀ of the particle's deformation since the start
     /// (the identity at first): its largest eigenvalue is the square of the largest stretch,
     /// which h follows (`integrate::smoothing_length`).
-    pub stretch: Vec<Tensor<D>>,
+    pub stretch: Vec<Sym<f64, D>>,
     /// Damage D ∈ [0, 1] (see `material::damage`); 1: failed.
     pub damage: Vec<f64>,
     /// Body index (into the case's bodies).
@@ -98,7 +101,7 @@ pub struct Particles<const D: usize> {
     /// The strain rate D = sym L of the last step (1/s), in single precision: what the
     /// artificial viscosity's limiter reads of the flow (`physics::viscosity::limited`); zero
     /// once the particle has flowed plastically (εp > 0), whose pairs keep the plain viscosity.
-    pub strain_rate: Vec<SMatrix<f32, D, D>>,
+    pub strain_rate: Vec<Sym<f32, D>>,
     /// What the continuity equation and the velocity gradient add to [`Particles::v`] (m/s),
     /// in single precision: v + dv is the velocity at the middle of the coming step, v^{n+½},
     /// extrapolated from the last two accelerations (see `integrate`, "Staggered material
@@ -144,7 +147,7 @@ impl<const D: usize> Particles<D> {
 
     /// Cauchy stress σ = −p I + S.
     pub fn stress(&self, i: usize) -> Tensor<D> {
-        self.s[i] - Tensor::<D>::identity() * self.p[i]
+        self.s[i].full() - Tensor::<D>::identity() * self.p[i]
     }
 
     /// Append one particle (all derived fields zero; `h0 = h`).
@@ -155,15 +158,15 @@ impl<const D: usize> Particles<D> {
         self.v.push(v);
         self.vh.push(v);
         self.a.push(Vector::<D>::zeros());
-        self.u.push(Vector::<D>::zeros());
+        self.u.push(SVector::<f32, D>::zeros());
         self.m.push(m);
         self.rho.push(rho);
         self.e.push(0.0);
         self.eh.push(0.0);
         self.p.push(0.0);
         self.c.push(0.0);
-        self.s.push(Tensor::<D>::zeros());
-        self.stretch.push(Tensor::<D>::identity());
+        self.s.push(Sym::zeros());
+        self.stretch.push(Sym::from_full(&Tensor::<D>::identity()));
         self.h.push(h);
         self.h0.push(h);
         self.eps_p.push(0.0);
@@ -172,7 +175,7 @@ impl<const D: usize> Particles<D> {
         self.body.push(body);
         self.id.push(id);
         self.contact_force.push(Vector::<D>::zeros());
-        self.strain_rate.push(SMatrix::<f32, D, D>::zeros());
+        self.strain_rate.push(Sym::zeros());
         self.dv.push(SVector::<f32, D>::zeros());
         self.n_real = self.x.len();
     }
@@ -271,12 +274,14 @@ pub fn from3<const D: usize>(a: [f64; 3]) -> Vector<D> {
 /// memory against 1.48 GB before). In 2D 771 B and 963 B (CN-SPH) at 5·10⁵. Since 2026-11-28
 /// a particle also keeps its strain rate and its mid-step velocity in single precision (48 B
 /// in 3D, 24 B in 2D) and the neighbour record grew by 24 B: 1223 B measured at 10⁶ in 3D;
-/// the other three add the same fields' sizes to their measurements.
+/// the other three add the same fields' sizes to their measurements. Since 2026-11-29 S, b and
+/// D keep one triangle ([`Sym`]) and u is single precision: 72 B less in 3D (1151 B measured
+/// at 10⁶), 8 B in 2D.
 pub fn estimated_bytes_per_particle(dimension: usize, corrected: bool) -> usize {
     match (dimension, corrected) {
-        (2, false) => 850,
-        (2, true) => 1050,
-        (_, false) => 1270,
-        (_, true) => 1620,
+        (2, false) => 840,
+        (2, true) => 1040,
+        (_, false) => 1200,
+        (_, true) => 1550,
     }
 }

@@ -610,7 +610,7 @@ impl<const D: usize> Simulation<D> {
                 && p.rho[i].is_finite()
                 && p.e[i].is_finite()
                 && p.p[i].is_finite()
-                && p.s[i].iter().all(|c| c.is_finite());
+                && p.s[i].is_finite();
             if !finite {
                 Some((i, "position, velocity, density, energy or stress is not finite (NaN/inf)".to_string()))
             } else if p.v[i].norm() > self.state.speed_limit {

@@ -207,7 +207,7 @@ fn steinberg_guinan_flows_at_its_shocked_state() {
     let p = &sim.particles;
     let behind: Vec<f64> = (0..p.n_real)
         .filter(|&i| p.body[i] == 1 && (6e-3..14e-3).contains(&p.x[i][0]))
-        .map(|i| strike::tensor::von_mises(&p.s[i]))
+        .map(|i| strike::tensor::von_mises(&p.s[i].full()))
         .collect();
     let vm = behind.iter().sum::<f64>() / behind.len() as f64;
     assert!(vm < 0.5 * 0.600e9 && vm > 0.2e9, "von Mises column: {vm}");
@@ -367,8 +367,8 @@ fn johnson_cook_failure_in_plane_strain_compression() {
                 if eps_p < 0.05 {
                     continue;
                 }
-                let sigma_eq = mean(&|i| strike::tensor::von_mises(&p.s[i]));
-                triaxiality += mean(&|i| -p.p[i] / strike::tensor::von_mises(&p.s[i]));
+                let sigma_eq = mean(&|i| strike::tensor::von_mises(&p.s[i].full()));
+                triaxiality += mean(&|i| -p.p[i] / strike::tensor::von_mises(&p.s[i].full()));
                 // The platens' gap, the block's height: the nominal equivalent strain rate of
                 // plane strain, 2/√3 v/H.
                 let (lo, hi) = extent_y(p, 0);

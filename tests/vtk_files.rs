@@ -11,6 +11,7 @@ use strike::case::{ColorBy, PictureSpec};
 use strike::output::picture::{self, SectionFrame};
 use strike::output::vtk::{self, PvdWriter};
 use strike::particles::{Particles, Tensor, Vector};
+use strike::tensor::Sym;
 
 const FIELDS: &str = "body,id,velocity,pressure,density,internal_energy,deviatoric_stress,\
                       von_mises,plastic_strain,damage,smoothing_length,contact_force,mass";
@@ -63,7 +64,7 @@ fn particles_2d() -> Particles<2> {
         p.p[k] = 1.0e8 * k as f64 + 0.125;
         p.e[k] = 3.5 * k as f64;
         p.eps_p[k] = 0.01 * k as f64;
-        p.s[k] = Tensor::<2>::new(1.0e6, 2.0e5, 2.0e5, -3.0e6) * k as f64;
+        p.s[k] = Sym::from_full(&(Tensor::<2>::new(1.0e6, 2.0e5, 2.0e5, -3.0e6) * k as f64));
         p.contact_force[k] = Vector::<2>::new(k as f64, -(k as f64));
     }
     p.p[3] = std::f64::consts::PI * 1.0e9;
@@ -81,7 +82,9 @@ fn particles_3d() -> Particles<3> {
         let v = Vector::<3>::new(1.0, 2.0, 3.0 * k as f64);
         p.push(x, v, 1e-6, 2700.0, 1.0e-3, (k / 5) as u32);
         p.p[k] = -1.5e7 * k as f64;
-        p.s[k] = Tensor::<3>::new(1.0, 2.0, 3.0, 2.0, -4.0, 5.0, 3.0, 5.0, 3.0) * 1.0e6;
+        p.s[k] = Sym::from_full(
+            &(Tensor::<3>::new(1.0, 2.0, 3.0, 2.0, -4.0, 5.0, 3.0, 5.0, 3.0) * 1.0e6),
+        );
     }
     p.p[3] = 1.0 / 3.0;
     p
@@ -184,7 +187,7 @@ fn vtp_3d_and_pvd_read_back() {
         [1.0, 2.0, 9.0]
     );
     let vm = appended_array(&bytes, "von_mises");
-    let expected = strike::tensor::von_mises(&p.s[0]);
+    let expected = strike::tensor::von_mises(&p.s[0].full());
     assert_eq!(f64_at(&vm, 0), expected);
     let conn = appended_array(&bytes, "connectivity");
     assert_eq!(conn.len(), 10 * 8);

@@ -54,7 +54,7 @@ fn color_value<const D: usize>(p: &Particles<D>, i: usize, color_by: ColorBy) ->
         ColorBy::Damage => p.damage[i],
         ColorBy::Velocity => p.v[i].norm(),
         ColorBy::Density => p.rho[i],
-        ColorBy::VonMises => tensor::von_mises(&p.s[i]),
+        ColorBy::VonMises => tensor::von_mises(&p.s[i].full()),
     }
 }
 

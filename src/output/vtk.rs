@@ -92,7 +92,7 @@ fn scalar<'a>(name: &'static str, values: &'a [f64], len: usize) -> Array<'a> {
 /// The full 3×3 deviatoric stress of particle `i`, row-major; in 2D plane strain the z row and
 /// column are zero except S_zz = −(S_xx + S_yy).
 pub fn deviatoric_stress3<const D: usize>(particles: &Particles<D>, i: usize) -> [f64; 9] {
-    let s = &particles.s[i];
+    let s = &particles.s[i].full();
     let mut out = [0.0; 9];
     for r in 0..D.min(3) {
         for c in 0..D.min(3) {
@@ -151,7 +151,7 @@ fn point_data<'a, const D: usize>(p: &'a Particles<D>, range: Range<usize>) -> V
             f64s(b, &deviatoric_stress3(p, o + i))
         }),
         float_array("von_mises", n, 1, move |i, b| {
-            b.extend_from_slice(&tensor::von_mises(&p.s[o + i]).to_le_bytes())
+            b.extend_from_slice(&tensor::von_mises(&p.s[o + i].full()).to_le_bytes())
         }),
         scalar("plastic_strain", at(&p.eps_p), n),
         scalar("damage", at(&p.damage), n),
@@ -456,7 +456,7 @@ mod tests {
     fn stress_2d_has_out_of_plane_component() {
         let mut p = Particles::<2>::default();
         p.push(Vector::<2>::zeros(), Vector::<2>::zeros(), 1.0, 1.0, 1.0, 0);
-        p.s[0] = Tensor::<2>::new(1.0, 2.0, 2.0, 3.0);
+        p.s[0] = crate::tensor::Sym::from_full(&Tensor::<2>::new(1.0, 2.0, 2.0, 3.0));
         let s = deviatoric_stress3(&p, 0);
         assert_eq!(s, [1.0, 2.0, 0.0, 2.0, 3.0, 0.0, 0.0, 0.0, -4.0]);
     }

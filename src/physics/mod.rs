@@ -398,7 +398,7 @@ impl<const D: usize> Gather<D> {
             failed: p.damage[i] >= 1.0,
             dp: p.h0[i] / ratio,
             v: arr(&p.v[i]),
-            u: std::array::from_fn(|k| p.u[i][k] as f32),
+            u: std::array::from_fn(|k| p.u[i][k]),
             m: p.m[i],
             vol: p.m[i] / p.rho[i],
             rho: p.rho[i],
@@ -415,7 +415,7 @@ impl<const D: usize> Gather<D> {
             d: std::array::from_fn(|k| {
                 let (a, b) = SYM[k];
                 if a < D && b < D {
-                    p.strain_rate[i][(a, b)]
+                    p.strain_rate[i].get(a, b)
                 } else {
                     0.0
                 }
@@ -1781,6 +1781,7 @@ mod tests {
     use super::*;
     use crate::kernel::CubicSpline;
     use crate::particles::Tensor;
+    use crate::tensor::Sym;
 
     /// The pass is bound by gathering its neighbours' records: their size is part of its
     /// speed (see [`Gather::u`]).
@@ -2060,13 +2061,13 @@ type = "welded"
             for k in 0..3 {
                 p.x[i][k] += 2e-4 * rnd();
                 p.v[i][k] += 30.0 * rnd();
-                p.u[i][k] = 0.1 * rnd();
+                p.u[i][k] = (0.1 * rnd()) as f32;
             }
             p.rho[i] *= 1.0 + 0.05 * rnd();
             p.p[i] = 1e8 * rnd();
             p.c[i] = 5000.0 * (1.0 + 0.1 * rnd());
             let s = Tensor::<3>::from_fn(|_, _| 1e8 * rnd());
-            p.s[i] = (s + s.transpose()) * 0.5;
+            p.s[i] = Sym::from_full(&((s + s.transpose()) * 0.5));
             if i % 7 == 0 {
                 p.damage[i] = 1.0;
             }
@@ -2371,7 +2372,7 @@ shape = { type = "rectangle", min = [0.0, 0.0], max = [8.0e-3, 6.0e-3] }
                 p.v[i][k] = 20.0 * random();
             }
             p.p[i] = 1e8 * (1.0 + 200.0 * p.x[i][0]);
-            p.s[i] = Tensor::<2>::new(1.0, 0.5, 0.5, -1.0) * (3e7 * random());
+            p.s[i] = Sym::from_full(&(Tensor::<2>::new(1.0, 0.5, 0.5, -1.0) * (3e7 * random())));
         }
         let mut nl = NeighborList::default();
         nl.build(&p.x, &p.h, p.n_real, 0.0);
