@@ -88,7 +88,7 @@ pub struct Particles<const D: usize> {
     pub plastic_work: Vec<f64>,
     /// The left Cauchy–Green tensor b = F Fᵀ of the particle's deformation since the start
     /// (the identity at first): its largest eigenvalue is the square of the largest stretch,
-    /// which h follows (`integrate::smoothing_length`).
+    /// which h follows (`integrate::smoothing_length`). Symmetric: one triangle is kept.
     pub stretch: Vec<Sym<f64, D>>,
     /// Damage D ∈ [0, 1] (see `material::damage`); 1: failed.
     pub damage: Vec<f64>,

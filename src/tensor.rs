@@ -5,10 +5,12 @@ use nalgebra::{SMatrix, SVector};
 
 /// A symmetric D × D tensor kept as its diagonal and the components above it (xy, xz, yz in
 /// 3D; xy in 2D, whose second slot stays zero): 48 bytes in 3D instead of 72, the same 32 in
-/// 2D. The particles' deviatoric stress and strain rate are exactly symmetric (the Jaumann
-/// update of a symmetric S with L's exactly antisymmetric spin adds the same products to (a, b)
-/// and (b, a)), so keeping one triangle loses nothing: [`Sym::full`] gives back the tensor the
-/// store was given, bit for bit.
+/// 2D. [`Sym::from_full`] keeps the upper triangle and [`Sym::full`] mirrors it: a symmetric
+/// tensor comes back bit for bit. The particles' S and b = F Fᵀ are symmetric in exact
+/// arithmetic, but the products that update them (Ω S − S Ω, ΔF b ΔFᵀ) add their terms in
+/// different orders for (a, b) and (b, a), and until 2026-11-29, when they were kept whole,
+/// they drifted apart at round-off; kept this way they stay symmetric. The strain rate
+/// ½ (L + Lᵀ) is symmetric to the bit.
 #[derive(Debug, Clone, Copy, PartialEq, serde::Serialize, serde::Deserialize)]
 pub struct Sym<T: nalgebra::Scalar, const D: usize> {
     diag: SVector<T, D>,
