@@ -169,30 +169,19 @@ fn mirror<const D: usize>(p: &mut Particles<D>, range: Range<usize>, plane: &Pla
             }
         }
     }
-    p.x[r.clone()]
-        .par_iter_mut()
-        .with_min_len(MIN)
-        .for_each(|x| x[k] = 2.0 * c - x[k]);
+    // Each field of the range, in parallel.
+    fn each<T: Send>(field: &mut [T], f: impl Fn(&mut T) + Sync + Send) {
+        field.par_iter_mut().with_min_len(MIN).for_each(f);
+    }
+    each(&mut p.x[r.clone()], |x| x[k] = 2.0 * c - x[k]);
     for field in [&mut p.v, &mut p.vh, &mut p.a, &mut p.contact_force] {
-        field[r.clone()]
-            .par_iter_mut()
-            .with_min_len(MIN)
-            .for_each(|v| v[k] = -v[k]);
+        each(&mut field[r.clone()], |v| v[k] = -v[k]);
     }
     for field in [&mut p.u, &mut p.dv] {
-        field[r.clone()]
-            .par_iter_mut()
-            .with_min_len(MIN)
-            .for_each(|v| v[k] = -v[k]);
+        each(&mut field[r.clone()], |v| v[k] = -v[k]);
     }
-    p.s[r.clone()]
-        .par_iter_mut()
-        .with_min_len(MIN)
-        .for_each(|s| s.mirror(k));
-    p.strain_rate[r]
-        .par_iter_mut()
-        .with_min_len(MIN)
-        .for_each(|s| s.mirror(k));
+    each(&mut p.s[r.clone()], |s| s.mirror(k));
+    each(&mut p.strain_rate[r], |s| s.mirror(k));
 }
 
 #[cfg(test)]
