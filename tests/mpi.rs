@@ -233,23 +233,9 @@ fn failure_on_1_2_3_ranks_is_the_serial_run_bit_for_bit() {
     std::fs::write(&deck, strike::bench::cubes_3d_jc()).unwrap();
     deck_matches_serial(&deck, "cubes_3d_jc", &d, 250);
     // The run does fail: the history's last row counts the failed particles.
-    let history = std::fs::read_to_string(d.join("serial/history.csv")).unwrap();
-    let mut rows = history.lines();
-    let column = rows
-        .next()
-        .unwrap()
-        .split(',')
-        .position(|c| c == "failed_particles")
-        .unwrap();
-    let failed: u64 = rows
-        .last()
-        .unwrap()
-        .split(',')
-        .nth(column)
-        .unwrap()
-        .parse()
-        .unwrap();
-    assert!(failed > 1000, "{failed} failed particles");
+    let history = strike::output::history::History::read(&d.join("serial/history.csv")).unwrap();
+    let failed = *history.column("failed_particles").unwrap().last().unwrap();
+    assert!(failed > 1000.0, "{failed} failed particles");
 }
 
 #[test]
