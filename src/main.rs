@@ -108,7 +108,7 @@ enum Command {
         fine: bool,
         /// Only these cases (repeatable): kernel, consistency, contact_direction, elastic_wave,
         /// hel, energy, planar_impact, bars, slow_bars, striker, sliding, incline, rubber_rings,
-        /// hertz, planar_7kms, sphere_plate, spall, shocked_strength, taylor,
+        /// hertz, planar_7kms, sphere_plate, crater, spall, shocked_strength, taylor,
         /// taylor_ofhc, taylor_walls.
         #[arg(long = "case", value_name = "NAME")]
         cases: Vec<String>,

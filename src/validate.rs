@@ -282,6 +282,11 @@ pub fn cases() -> Vec<CaseDef> {
             run: contact::sphere_plate,
         },
         CaseDef {
+            name: "crater",
+            title: "Hypervelocity cratering: a 1 mm Al sphere at 6 km/s into a thick Al block, against the Cour-Palais crater depth (issue 13)",
+            run: contact::crater,
+        },
+        CaseDef {
             name: "spall",
             title: "Flyer-plate spall: pull-back against the set spall strength (VALIDATION.md §F), the free face and the spall plane against an independent 1D Lagrangian solution",
             run: spall,
@@ -332,6 +337,7 @@ fn example(name: &str) -> Result<Case> {
         "planar_7kms_contact" => include_str!("../examples/planar_7kms_contact.toml"),
         "sphere_plate" => include_str!("../examples/sphere_plate.toml"),
         "sphere_plate_cn" => include_str!("../examples/sphere_plate_cn.toml"),
+        "crater" => include_str!("../examples/crater.toml"),
         other => return Err(Error::Invalid(format!("no built-in deck `{other}`"))),
     };
     crate::deck::parse(text, &format!("examples/{name}.toml"))

@@ -1,7 +1,8 @@
 //! The contact's verification cases (VALIDATION.md §B–§D), each in both formulations (issue 12)
 //! with the same tolerances: planar impact, bars at ±400 m/s, bars at ±10 m/s, a striker,
 //! frictionless sliding, the incline, the rubber rings, Hertz's spheres, the 7 km/s planar
-//! impact and the paper's demonstration at a coarse spacing.
+//! impact and the paper's demonstration at a coarse spacing; and its hypervelocity cousin, a
+//! sphere cratering a thick block (issue 13).
 //!
 //! Coarse runs each deck's spacing; `fine` adds half of it (the README's two resolutions), and
 //! where a case is held to converge, a check that the error did not grow. The verification
@@ -1543,4 +1544,152 @@ pub fn sphere_plate(fine: bool) -> Result<Outcome> {
         ));
     }
     Ok(Outcome { checks, figures })
+}
+
+/// The Cour-Palais crater depth in a thick metal target as NASA's single-wall ballistic limit
+/// uses it (Christiansen 1991, JSC SN3-91-42; Christiansen et al. 2009, NASA/TM-2009-214785; the
+/// form of Cour-Palais 1987, Int. J. Impact Eng. 5, 221, whose thin targets perforate at 1.8
+/// times it): P∞ = 5.24 d^(19/18) HB^(−1/4) (ρp/ρt)^(1/2) (V/C)^(2/3) in cm, with the
+/// projectile's diameter d in cm, V and the target's speed of sound C = √(E/ρ) alike (km/s in
+/// the source; only their ratio enters) and HB its Brinell hardness. Here d in m, P∞ in m.
+pub fn cour_palais_depth(d: f64, v_over_c: f64, rho_p_over_t: f64, hb: f64) -> f64 {
+    let d_cm = d * 100.0;
+    5.24 * d_cm.powf(19.0 / 18.0) * hb.powf(-0.25) * rho_p_over_t.sqrt() * v_over_c.powf(2.0 / 3.0)
+        / 100.0
+}
+
+/// What [`crater_run`] measures (m).
+pub struct CraterRun {
+    /// Depth of the crater's floor on the impact axis below the target's original surface.
+    pub depth: f64,
+    /// The diameter of the sphere of the projectile's particles' mass, (6 m / π ρ0)^(1/3).
+    pub d_eq: f64,
+    pub rows: Vec<Row>,
+}
+
+/// Runs a crater deck (`examples/crater.toml`: body 0 the sphere, body 1 the block below z = 0,
+/// the impact along −z through x = y = 0, symmetry planes through the axis) to its end and
+/// measures the crater's depth on the axis: among the block's particles within 0.4 d of the axis,
+/// the highest that has at least two layers' worth of them (2 A/Δp² for the column's section
+/// A) within 2 Δp below it, so that loose debris in the crater does not count; its depth below
+/// the original surface (the top layer's centres plus Δp/2), less the half spacing it stands
+/// for. The projectile's size is its particles' mass as a sphere's diameter (the lattice's
+/// sphere is not the deck's to a few per cent), with every symmetry plane's mirror counted.
+pub fn crater_run(case: &Case) -> Result<CraterRun> {
+    let mut sim = Simulation::<3>::new(case)?;
+    let p = &sim.particles;
+    let dp = case.bodies[1].spacing;
+    let rho0 = case.materials[case.bodies[0].material].density;
+    let mirrors = 2.0_f64.powi(case.symmetry.len() as i32);
+    let mass: f64 = (0..p.n_real)
+        .filter(|&i| p.body[i] == 0)
+        .map(|i| p.m[i])
+        .sum();
+    let d_eq = (6.0 * mass * mirrors / (std::f64::consts::PI * rho0)).cbrt();
+    let surface = (0..p.n_real)
+        .filter(|&i| p.body[i] == 1)
+        .map(|i| p.x[i][2])
+        .fold(f64::NEG_INFINITY, f64::max)
+        + 0.5 * dp;
+    let rows = record(&mut sim, case.simulation.end_time, |_| {})?;
+    let p = &sim.particles;
+    let reach = 0.4 * d_eq;
+    let mut column: Vec<f64> = (0..p.n_real)
+        .filter(|&i| p.body[i] == 1 && p.x[i][0].hypot(p.x[i][1]) < reach)
+        .map(|i| p.x[i][2])
+        .collect();
+    column.sort_by(|a, b| b.total_cmp(a));
+    let area = std::f64::consts::PI * reach * reach / mirrors;
+    let layers = (2.0 * area / (dp * dp)).round().max(2.0) as usize;
+    let floor = column
+        .iter()
+        .enumerate()
+        .find(|&(k, &z)| {
+            column[k + 1..]
+                .iter()
+                .take_while(|&&w| w >= z - 2.0 * dp)
+                .count()
+                >= layers
+        })
+        .map(|(_, &z)| z)
+        .ok_or_else(|| Error::Invalid("no crater floor on the axis".into()))?;
+    Ok(CraterRun {
+        depth: surface - (floor + 0.5 * dp),
+        d_eq,
+        rows,
+    })
+}
+
+/// Hypervelocity cratering (issue 13, item 6; `examples/crater.toml`): a 1 mm Al 6061-T6 sphere
+/// at 6 km/s into a thick 6061-T6 block, the library's material (Steinberg's elastic–perfectly
+/// plastic 6061-T6 with its spall strength), against the Cour-Palais crater depth
+/// ([`cour_palais_depth`]) with HB = 95 and C = √(E/ρ) = √(68.9 GPa / 2700 kg/m³) = 5.05 km/s
+/// (ASM handbook values as NASA's BLE tool pyBLOSSUM tabulates them): 1.66 mm for d = 1 mm.
+/// The equation is an empirical fit without a published scatter band in the sources at hand, so
+/// the depth is reported against it, not held; held are that refinement does not move the depth
+/// away from it, no mixing and momentum. Coarse: d/Δp = 6 and 8 (about 7 minutes on 2 cores);
+/// `fine`: 8 and 10 (about 18). Measured on 2026-11-29: 1.94 / 2.29 / 2.25 mm at d/Δp = 6 /
+/// 8 / 10, +9.6 / +36.1 / +33.4 %: the coarse pair fails its convergence check (README, Not
+/// yet).
+pub fn crater(fine: bool) -> Result<Outcome> {
+    let source = "Cour-Palais crater depth (Christiansen 1991, NASA/TM-2009-214785)";
+    let (hb, c) = (95.0, (68.9e9_f64 / 2700.0).sqrt());
+    let mut checks = Vec::new();
+    let mut previous = None;
+    let ratios: &[f64] = if fine { &[8.0, 10.0] } else { &[6.0, 8.0] };
+    for &ratio in ratios {
+        let mut case = example("crater")?;
+        let d = match case.bodies[0].shape {
+            Shape::Sphere { radius, .. } => 2.0 * radius,
+            _ => {
+                return Err(Error::Invalid(
+                    "the crater's projectile is not a sphere".into(),
+                ))
+            }
+        };
+        for b in &mut case.bodies {
+            b.spacing = d / ratio;
+        }
+        let v = case.bodies[0]
+            .velocity
+            .iter()
+            .map(|c| c * c)
+            .sum::<f64>()
+            .sqrt();
+        let r = crater_run(&case)?;
+        let s = setting(&case, &format!("d/Δp = {ratio}"));
+        let reference = cour_palais_depth(r.d_eq, v / c, 1.0, hb);
+        checks.push(
+            Check::new("crater depth on the axis", &s, r.depth, "m", source).reported(reference),
+        );
+        let error = (r.depth / reference - 1.0).abs();
+        converges(
+            &mut checks,
+            &mut previous,
+            error,
+            "crater depth's error, finer against coarser",
+            &s,
+        );
+        mixing_checks(
+            &mut checks,
+            &r.rows,
+            &s,
+            (0.0, 0.0),
+            "no mixing (issue 12, item 6; VALIDATION.md §D)",
+        );
+        let pz0 = r.rows[0].d.momentum[2];
+        let pz = r
+            .rows
+            .iter()
+            .map(|row| (row.d.momentum[2] - pz0).abs())
+            .fold(0.0, f64::max)
+            / pz0.abs();
+        checks.push(
+            Check::new("z momentum error", &s, pz, "", "no external force along z").at_most(1e-10),
+        );
+    }
+    Ok(Outcome {
+        checks,
+        figures: Vec::new(),
+    })
 }
