@@ -178,6 +178,25 @@ fn momentum_check(rows: &[Row], setting: &str) -> Check {
     .at_most(1e-10)
 }
 
+/// Momentum along z to 1e-10 of its initial value: the impact's axis, along which a quarter
+/// model's symmetry planes exert no force.
+fn z_momentum_check(rows: &[Row], setting: &str) -> Check {
+    let pz0 = rows[0].d.momentum[2];
+    let pz = rows
+        .iter()
+        .map(|r| (r.d.momentum[2] - pz0).abs())
+        .fold(0.0, f64::max)
+        / pz0.abs();
+    Check::new(
+        "z momentum error",
+        setting,
+        pz,
+        "",
+        "no external force along z",
+    )
+    .at_most(1e-10)
+}
+
 /// No particle past the other body's surface layer by more than `depth` (Δp), and at most
 /// `count` particles past it.
 fn mixing_checks(
@@ -1467,12 +1486,6 @@ pub fn sphere_plate(fine: bool) -> Result<Outcome> {
             .map(|r| (r.d.total - e0).abs())
             .fold(0.0, f64::max)
             / e0;
-        let pz0 = rows[0].d.momentum[2];
-        let pz = rows
-            .iter()
-            .map(|r| (r.d.momentum[2] - pz0).abs())
-            .fold(0.0, f64::max)
-            / pz0.abs();
         let rear: Vec<usize> = (0..p.n_real)
             .filter(|&i| p.body[i] == 0 && z0[p.id[i] as usize] > rear_z0)
             .collect();
@@ -1501,9 +1514,7 @@ pub fn sphere_plate(fine: bool) -> Result<Outcome> {
             0.05,
             "of the initial energy (VALIDATION.md §C)",
         ));
-        checks.push(
-            Check::new("z momentum error", &s, pz, "", "no external force along z").at_most(1e-10),
-        );
+        checks.push(z_momentum_check(&rows, &s));
         checks.push(
             Check::new("sphere's rear v_z", &s, mean_vz(&rear), "m/s", demo).at_most(-2000.0),
         );
@@ -1653,7 +1664,7 @@ pub fn crater(fine: bool) -> Result<Outcome> {
         let v = case.bodies[0]
             .velocity
             .iter()
-            .map(|c| c * c)
+            .map(|u| u * u)
             .sum::<f64>()
             .sqrt();
         let r = crater_run(&case)?;
@@ -1677,16 +1688,7 @@ pub fn crater(fine: bool) -> Result<Outcome> {
             (0.0, 0.0),
             "no mixing (issue 12, item 6; VALIDATION.md §D)",
         );
-        let pz0 = r.rows[0].d.momentum[2];
-        let pz = r
-            .rows
-            .iter()
-            .map(|row| (row.d.momentum[2] - pz0).abs())
-            .fold(0.0, f64::max)
-            / pz0.abs();
-        checks.push(
-            Check::new("z momentum error", &s, pz, "", "no external force along z").at_most(1e-10),
-        );
+        checks.push(z_momentum_check(&r.rows, &s));
     }
     Ok(Outcome {
         checks,
