@@ -231,7 +231,7 @@ fn taylor_bars_converge_and_their_walls_agree() {
 
 /// Issue 13, item 6, hypervelocity (`strike validate --fine --case crater`): a 1 mm Al 6061-T6
 /// sphere at 6 km/s into a thick 6061-T6 block at d/Δp = 8 and 10 (about 18 minutes on 2
-/// cores). The crater's depth is reported against the Cour-Palais equation's (+36 / +33 % on
+/// cores). The crater's depth is reported against the Cour-Palais equation's (+36.1 / +33.5 % on
 /// 2026-11-29, README, Not yet); held: it does not move away from it with refinement, no
 /// mixing, momentum.
 #[test]

@@ -1640,7 +1640,7 @@ pub fn crater_run(case: &Case) -> Result<CraterRun> {
 /// the depth is reported against it, not held; held are that refinement does not move the depth
 /// away from it, no mixing and momentum. Coarse: d/Δp = 6 and 8 (about 7 minutes on 2 cores);
 /// `fine`: 8 and 10 (about 18). Measured on 2026-11-29: 1.94 / 2.29 / 2.25 mm at d/Δp = 6 /
-/// 8 / 10, +9.6 / +36.1 / +33.4 %: the coarse pair fails its convergence check (README, Not
+/// 8 / 10, +9.6 / +36.1 / +33.5 %: the coarse pair fails its convergence check (README, Not
 /// yet).
 pub fn crater(fine: bool) -> Result<Outcome> {
     let source = "Cour-Palais crater depth (Christiansen 1991, NASA/TM-2009-214785)";
