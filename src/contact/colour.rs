@@ -20,15 +20,23 @@
 //!   P = ½ σ_u(ε) dε/dc: eq. (5)'s shape with the pair factor K n (W_ij/W0)^(n−1) replaced by
 //!   the two particles' colour derivatives. Each pair's force is split along the contact
 //!   normal n̂_ij (from the two bodies' own outward normals, [`normal`]): the normal part acts
-//!   in full and never pulls; of the tangential part — for a pair, the lattice corrugation of
-//!   the other body's surface, not a physical force — only [`TANGENTIAL`] is kept. With all of
-//!   it the two lattices of a 7 km/s planar impact slide into each other's gaps at Δp = 0.05
-//!   mm (penetration 2.1 Δp); with none of it particles sliding sideways past each other at a
-//!   jet's edge are not kept apart, and the work of the forces departs from the potential in
-//!   curved contacts (a Hertz impact's energy strays by 1.3 % during the contact). Half keeps
-//!   the planar interface flat within 0.1 Δp and the Hertz excursion at 0.85 % (back to 3e-5
-//!   once the spheres part). Linear momentum is conserved exactly (every pair force is
-//!   antisymmetric); angular momentum and energy are not, to the extent measured above.
+//!   in full and never pulls; of the tangential part — for a pair mostly the lattice
+//!   corrugation of the other body's surface — all is kept while the interface is pressed
+//!   lightly, and only [`TANGENTIAL`] of it where it is pressed hard ([`tangential_share`], by
+//!   the pair's interface strain). With all of it at every load the two lattices of a 7 km/s
+//!   planar impact slide into each other's gaps at Δp = 0.05 mm (penetration 2.1 Δp when the
+//!   share was chosen; with the damping since, the interface roughens to 0.73 Δp, against
+//!   1e-4 Δp with half); with none of it particles sliding sideways past each other at a jet's
+//!   edge are not kept apart. Half at every load (until 2026-11-29) kept the planar interface
+//!   flat but made the contact a drag wherever a body slides along a curved one, since the
+//!   work of a force that is not −∇Φ departs from the potential: the ogive projectile of
+//!   `examples/ogive_plate.toml` at 167 m/s lost 12 % of the energy in 80 µs, and came out at
+//!   7.5 m/s against 31.5 m/s with all of −∇Φ; a Hertz impact's energy strayed by 0.83 %.
+//!   Below [`PRESSED`] the force is −∇Φ and energy is kept (4e-5 and 2e-4). Linear momentum is
+//!   conserved exactly (every pair force is antisymmetric); where the share falls below one,
+//!   angular momentum and energy are not: a 1 mm aluminium sphere into an aluminium block at
+//!   6 km/s (`examples/crater.toml`) loses 4.5 % of the energy in its first 0.25 µs (CN-SPH,
+//!   whose contact acts along the normal only, 5.1 %), the same at a third of the step.
 //! - **Damping.** The interface of a shock is part of the shock: [`damping`] gives contact
 //!   pairs the bulk's quadratic viscosity on their normal closing speed (without it the first
 //!   layers of a 7 km/s impact closed to 0.44 Δp and rang back; with it 0.58 Δp, and the peak
@@ -197,6 +205,8 @@ pub struct ColourState {
     pub normal: [f64; 3],
     /// Whether it has a contact neighbour within the support.
     pub near: bool,
+    /// The interface strain ε its colour reads (0 where it is not pressed).
+    pub strain: f64,
 }
 
 /// How two bodies meet, as the colour states need it.
@@ -356,6 +366,7 @@ pub fn states<const D: usize, K: Kernel>(
             s.coef = 0.5 * sigma * deps;
             s.curvature = 0.5 * stiff * deps * deps;
             s.energy = 0.5 * vol0 * work;
+            s.strain = eps.max(0.0);
         }
         s
     });
@@ -383,15 +394,33 @@ pub fn normal<const D: usize>(
     }
 }
 
-/// The share of the tangential part of each pair's force that the colour law keeps (see the
-/// module doc).
+/// The share of the tangential part of each pair's force that the colour law keeps between
+/// lattices pressed hard together (see the module doc and [`tangential_share`]).
 pub const TANGENTIAL: f64 = 0.5;
+
+/// The interface strains between which the tangential share falls from 1 (all of −∇Φ) to
+/// [`TANGENTIAL`]: 0.05, about 5 GPa of interface stress in aluminium (a 1 km/s impact), and
+/// 0.15, about 17 GPa (3 km/s). A 7 km/s impact presses its interface to ε ≈ 0.35.
+pub const PRESSED: (f64, f64) = (0.05, 0.15);
+
+/// The share of the tangential part of a pair's force that conventional SPH's colour law keeps
+/// (the module doc's **Force**): all of it, so that the force is −∇Φ and the contact keeps the
+/// energy, while the pair's interface strain ε = max(ε_i, ε_j) is below [`PRESSED`]`.0`;
+/// [`TANGENTIAL`] beyond [`PRESSED`]`.1`, where the two lattices are pressed hard enough for the
+/// corrugation to push them into each other's gaps; a smoothstep in ε between. Symmetric in i
+/// and j, so every pair force stays antisymmetric.
+pub fn tangential_share(si: &ColourState, sj: &ColourState) -> f64 {
+    let (start, full) = PRESSED;
+    let x = ((si.strain.max(sj.strain) - start) / (full - start)).clamp(0.0, 1.0);
+    1.0 - (1.0 - TANGENTIAL) * x * x * (3.0 - 2.0 * x)
+}
 
 /// The colour-law force on i from its contact neighbour j (i of body A, j of body B) at
 /// distance r, with xij = x_i − x_j, reference volumes `vol0` and reference h0 = h0_ij: the
 /// pair's part of −∇Φ, taken along the contact normal and never pulling, with the share
-/// `tangential` of its tangential part ([`TANGENTIAL`] in conventional SPH, none in CN-SPH,
-/// whose contact acts along the surface normal); and the pair's stiffness for the time step.
+/// `tangential` of its tangential part ([`tangential_share`] in conventional SPH, none in
+/// CN-SPH, whose contact acts along the surface normal); and the pair's stiffness for the time
+/// step.
 #[inline(never)]
 #[allow(clippy::too_many_arguments)]
 pub fn pair<const D: usize, K: Kernel>(

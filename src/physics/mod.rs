@@ -851,7 +851,11 @@ fn particle_rates<const D: usize, K: Kernel, const ART: bool, const CN: bool>(
                             vol0,
                             h0,
                             // CN-SPH: along the contact normal only (frictionless).
-                            if CN { 0.0 } else { colour::TANGENTIAL },
+                            if CN {
+                                0.0
+                            } else {
+                                colour::tangential_share(&colour[i], &colour[j as usize])
+                            },
                         );
                         for a in 0..D {
                             fc[a] += f[a];
