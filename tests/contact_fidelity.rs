@@ -301,10 +301,10 @@ fn mixing_flags_the_interdigitation_of_the_paper_form() {
 /// plate at 167 m/s, the first 30 µs, conventional SPH: the nose slides through the hole it
 /// makes, and the contact keeps the total energy within 0.5 % and the projectile's speed. Its
 /// interface is pressed to a strain of a few per cent, where the colour law's force is all of
-/// −∇Φ (`colour::tangential_share`). With half its tangential part dropped at every load (until
-/// 2026-11-29) the contact was a drag: 9 % of the energy was gone by 30 µs (12 % by 80 µs), the
-/// projectile's speed at 80 µs was 7.5 m/s against 31.5 with all of −∇Φ. Measured 2026-11-29:
-/// energy error 4.4e-5 at 80 µs.
+/// −∇Φ (`colour::tangential_share`). With half its tangential part dropped at every load
+/// (until 2026-11-29) the contact was a drag: 7.6 % of the energy was gone by 30 µs (12 % by
+/// 80 µs), and the projectile's speed at 80 µs was 7.5 m/s against 31.5 with all of −∇Φ.
+/// Measured 2026-11-29: energy error 3.6e-5 at 30 µs, 4.4e-5 at 80 µs.
 #[test]
 fn slow_penetration_keeps_its_energy() {
     let mut case = load("ogive_plate");
