@@ -27,8 +27,9 @@
 //!    collapses onto the layer behind it, and the pressure overshoots by 75 %. The colour form
 //!    takes the power of the *sum* of kernel values (the other body's colour, smooth along a
 //!    surface to 0.05–1 %), applies each pair's force along the contact normal with only half
-//!    its tangential part (the paper's CN-SPH contact "has the direction of normal to the
-//!    contact surface"), and sizes the stiffness by the material's own compression curve, so
+//!    its tangential part where the interface is pressed hard (all of it under light loads,
+//!    [`colour::tangential_share`]; the paper's CN-SPH contact "has the direction of normal to
+//!    the contact surface"), and sizes the stiffness by the material's own compression curve, so
 //!    that the interface compresses as the bodies do. The potential alone is conservative: the
 //!    facing layers of a 7 km/s impact bounce off it as off a spring (closing to 0.44 Δp); the
 //!    colour form gives the interface the bulk's shock viscosity on its normal closing speed
