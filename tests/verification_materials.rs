@@ -330,8 +330,9 @@ shape = { type = "box", min = [0.0, 0.0, 0.0], max = [0.01, 0.01, 0.01] }
 /// this test then fails. The failure strain is held within 15 % at the coarser spacing and 10 %
 /// at the finer, its error not growing with refinement. The core's triaxiality is not quite
 /// −1/√3: the block's faces against the platens flow outwards ahead of its middle (its faces
-/// 3.5 % wider than its waist at 15 µs, Δp = 0.1 mm, against 1.0 % before: the contact face's own error, see README,
-/// Not yet), so σ* averages −0.51 / −0.54 in conventional SPH and −0.61 / −0.57 in CN-SPH.
+/// 3.5 % wider than its waist at 15 µs, Δp = 0.1 mm, against 1.0 % before: the contact face's
+/// own error, see README, Not yet), so σ* averages −0.51 / −0.54 in conventional SPH and
+/// −0.61 / −0.57 in CN-SPH.
 /// Measured on 2026-11-29: conventional SPH fails at εp = 0.388 / 0.401 (−11.7 / −8.7 % of
 /// 0.439) at Δp = 0.1 / 0.05 mm, CN-SPH at 0.406 / 0.430 (−7.4 / −2.2 %). Until 2026-11-29
 /// conventional SPH's contact dropped half of each pair's tangential force at every load,
