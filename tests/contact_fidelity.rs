@@ -20,12 +20,7 @@ use strike::contact::colour;
 use strike::simulation::{Diagnostics, Simulation};
 
 mod support;
-use support::validated;
-
-fn load(name: &str) -> Case {
-    let path = format!("{}/examples/{name}.toml", env!("CARGO_MANIFEST_DIR"));
-    strike::deck::load(std::path::Path::new(&path)).unwrap_or_else(|e| panic!("{path}: {e:?}"))
-}
+use support::{example as load, two_resolutions, validated};
 
 fn parse(text: &str) -> Case {
     strike::deck::parse(text, "test.toml").unwrap_or_else(|e| panic!("{e:?}"))
@@ -364,13 +359,7 @@ fn friction_ratio(sim: &Simulation<2>) -> f64 {
 /// `tests/verification_materials.rs`).
 #[test]
 fn platens_squeeze_a_block_without_friction() {
-    for mut case in [1.0, 0.5].map(|k| {
-        let mut c = load("jc_failure_compression");
-        for b in &mut c.bodies {
-            b.spacing *= k;
-        }
-        c
-    }) {
+    for mut case in two_resolutions("jc_failure_compression") {
         case.simulation.end_time = 15.0e-6;
         let dp = case.bodies[0].spacing;
         let (mut worst, mut next) = (0.0_f64, 4.0e-6);

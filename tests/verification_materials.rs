@@ -5,22 +5,7 @@ use strike::simulation::Simulation;
 use strike::validate::{pull_back, spall_plane, spall_run, SPALL_LAGRANGIAN_1D};
 
 mod support;
-use support::validated;
-
-fn load(name: &str) -> Case {
-    let path = format!("{}/examples/{name}.toml", env!("CARGO_MANIFEST_DIR"));
-    strike::deck::load(std::path::Path::new(&path)).unwrap_or_else(|e| panic!("{path}: {e:?}"))
-}
-
-/// The deck, and the deck with every spacing halved.
-fn two_resolutions(name: &str) -> [Case; 2] {
-    let coarse = load(name);
-    let mut fine = coarse.clone();
-    for b in &mut fine.bodies {
-        b.spacing *= 0.5;
-    }
-    [coarse, fine]
-}
+use support::{example as load, two_resolutions, validated};
 
 /// Issue 13, item 6 (spall): a flyer-plate impact spalls the target, and the free-face pull-back
 /// gives back the spall strength set in the deck, σ_s = ½ ρ0 c Δu_fs, within 10 %, at two
@@ -430,7 +415,8 @@ fn johnson_cook_failure_in_plane_strain_compression() {
                 core.len()
             );
             let error = (at_failure / eps_f - 1.0).abs();
-            let tolerance = if errors.is_empty() { 0.15 } else { 0.10 };
+            // 15 % at the coarser spacing (`two_resolutions` gives it first), 10 % at the finer.
+            let tolerance = [0.15, 0.10][errors.len()];
             assert!(
                 error < tolerance,
                 "{formulation:?}, Δp = {dp}: failed at εp = {at_failure} against ε_f = {eps_f}"

@@ -1,10 +1,28 @@
-//! What several test files share: the Python with VTK's own reader that checks output files.
+//! What several test files share: the example decks, at one resolution or two, and the Python
+//! with VTK's own reader that checks output files.
 
 #![allow(dead_code)]
 
 use std::path::{Path, PathBuf};
 use std::process::Command;
 use std::sync::OnceLock;
+use strike::case::Case;
+
+/// The deck `examples/NAME.toml`.
+pub fn example(name: &str) -> Case {
+    let path = format!("{}/examples/{name}.toml", env!("CARGO_MANIFEST_DIR"));
+    strike::deck::load(Path::new(&path)).unwrap_or_else(|e| panic!("{path}: {e:?}"))
+}
+
+/// The deck `examples/NAME.toml`, and the same with every spacing halved.
+pub fn two_resolutions(name: &str) -> [Case; 2] {
+    let coarse = example(name);
+    let mut fine = coarse.clone();
+    for b in &mut fine.bodies {
+        b.spacing *= 0.5;
+    }
+    [coarse, fine]
+}
 
 /// The Python of a virtual environment holding VTK's Python package, made by
 /// `tests/support/provision_vtk.sh` the first time a test asks for it (on a fresh clone, the
