@@ -1032,7 +1032,7 @@ fn converges(
 /// over the rod's particles from the lowest to the highest plus one spacing (each particle
 /// stands for a cell Δp across); it overstates the length by up to Δp/2, the lowest layer being
 /// flattened. The face diameter is twice the largest radius among the particles within
-/// 0.6 Δp of the rod's lowest, plus one spacing.
+/// [`FACE_LAYER`] of the rod's lowest, plus one spacing.
 pub fn taylor_run(case: &Case) -> Result<TaylorRun> {
     let mut sim = Simulation::<3>::new(case)?;
     run_to(&mut sim, case.simulation.end_time)?;
@@ -1045,7 +1045,7 @@ pub fn taylor_run(case: &Case) -> Result<TaylorRun> {
     let hi = rod.iter().map(|&i| z(i)).fold(f64::NEG_INFINITY, f64::max);
     let r_face = rod
         .iter()
-        .filter(|&&i| z(i) < lo + 0.6 * dp)
+        .filter(|&&i| z(i) < lo + FACE_LAYER * dp)
         .map(|&i| radius(i))
         .fold(0.0, f64::max);
     let eps = rod.iter().map(|&i| p.eps_p[i]).fold(0.0, f64::max);
@@ -1067,6 +1067,15 @@ pub fn taylor_run(case: &Case) -> Result<TaylorRun> {
         profile,
     })
 }
+
+/// How far above the rod's lowest particle [`taylor_run`] looks for the face's rim, in
+/// spacings: one whole spacing, the height of a particle's cell, so that the lowest layer's
+/// particles are in it where the layer is not flat. Until 2026-11-29 it was 0.6 Δp, and a
+/// single particle pressed onto the wall on the axis (the copper benchmark's on its `[[wall]]`
+/// at R0/Δp = 16, 0.2 µm off it) put the rim, 0.68 Δp above that particle, out of reach: the
+/// face read 14.02 mm for a rim at 14.40, and the walls' disagreement −1.95 % for −4.5 %. From
+/// 0.75 Δp to 2 Δp the copper benchmark's three faces read the same at R0/Δp = 8 and 16.
+pub const FACE_LAYER: f64 = 1.0;
 
 /// What [`taylor_run`] measures (m).
 pub struct TaylorRun {
@@ -1358,20 +1367,24 @@ pub fn taylor_variants(deck: &str, spacing: f64) -> Result<Vec<(&'static str, Ca
 /// (`examples/taylor_copper.toml`, 227 m/s; the benchmark of Kamoulakos 1990, Zhu & Cescotto
 /// 1995, Camacho & Ortiz 1997: final length 21.42–21.47 mm, mushroom diameter 14.0–14.4 mm),
 /// each on its `[[wall]]`, against its twin through the contact and on a fixed wall through
-/// the contact, at R0/Δp = 8 (and 16): the three walls agree within 2 % in final length and
-/// face diameter. On a symmetry plane instead, reported beside them: a symmetry plane is a wall
-/// that also pulls, and it holds the face in tension where the radial release meets on the
-/// axis (`boundary`), so it is the same problem only while the face is pressed. The copper bar
-/// against the published results: length within 4 % and face within 5 % at R0/Δp = 16,
-/// reported at 8. About 6 minutes at R0/Δp = 8 and over an hour more with `fine` on 2 cores.
-/// It fails today: through the contact (twin, fixed wall) the faces are narrower than on the
-/// wall, by the contact's own error at a face (README, Not yet).
+/// the contact: the three walls agree within 2 % in final length and face diameter at
+/// R0/Δp = 16 (`fine`), and the face's disagreement does not grow with refinement; at 8 the
+/// figures are reported. Through the contact the faces come out narrower than on the wall, by
+/// the contact's own error at a face (README, Not yet), which shrinks with refinement: the
+/// copper twin's face −9.5 % of the wall's at R0/Δp = 8 and −4.5 % at 16, the steel twin's
+/// −2.8 and −0.3 % (2026-11-29). The copper bar fails at 16. On a symmetry plane instead, reported beside them: a symmetry plane is a wall that also pulls,
+/// and it holds the face in tension where the radial release meets on the axis (`boundary`),
+/// so it is the same problem only while the face is pressed. The copper bar against the
+/// published results: length within 4 % and face within 5 % at R0/Δp = 16, reported at 8.
+/// About 6 minutes at R0/Δp = 8 and over an hour more with `fine` on 2 cores.
 pub fn taylor_walls(fine: bool) -> Result<Outcome> {
     let (length, face) = (21.445e-3, 14.2e-3);
     let source = "Kamoulakos 1990; Zhu & Cescotto 1995; Camacho & Ortiz 1997";
     let mut checks = Vec::new();
     let spacings: &[f64] = if fine { &[0.4e-3, 0.2e-3] } else { &[0.4e-3] };
     for deck in ["taylor_bar", "taylor_copper"] {
+        // Each wall's face disagreement at the coarser spacing, for the convergence check.
+        let mut previous: Vec<(&'static str, Option<f64>)> = Vec::new();
         for &dp in spacings {
             let ratio = (3.2e-3 / dp).round();
             let mut on_wall = None;
@@ -1402,11 +1415,27 @@ pub fn taylor_walls(fine: bool) -> Result<Outcome> {
                     ("face diameter against the wall's", r.face, d0),
                 ] {
                     let c = Check::new(what, &s, got, "m", walls);
-                    checks.push(if label == "symmetry plane" {
+                    checks.push(if label == "symmetry plane" || ratio < 16.0 {
                         c.reported(want)
                     } else {
                         c.within(want, 0.02)
                     });
+                }
+                if label != "symmetry plane" {
+                    let k = match previous.iter().position(|(l, _)| *l == label) {
+                        Some(k) => k,
+                        None => {
+                            previous.push((label, None));
+                            previous.len() - 1
+                        }
+                    };
+                    converges(
+                        &mut checks,
+                        &mut previous[k].1,
+                        (r.face / d0 - 1.0).abs(),
+                        "face diameter against the wall's, finer against coarser",
+                        &s,
+                    );
                 }
             }
         }
