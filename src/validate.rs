@@ -1372,11 +1372,12 @@ pub fn taylor_variants(deck: &str, spacing: f64) -> Result<Vec<(&'static str, Ca
 /// figures are reported. Through the contact the faces come out narrower than on the wall, by
 /// the contact's own error at a face (README, Not yet), which shrinks with refinement: the
 /// copper twin's face −9.5 % of the wall's at R0/Δp = 8 and −4.5 % at 16, the steel twin's
-/// −2.8 and −0.3 % (2026-11-29). The copper bar fails at 16. On a symmetry plane instead, reported beside them: a symmetry plane is a wall that also pulls,
-/// and it holds the face in tension where the radial release meets on the axis (`boundary`),
-/// so it is the same problem only while the face is pressed. The copper bar against the
-/// published results: length within 4 % and face within 5 % at R0/Δp = 16, reported at 8.
-/// About 6 minutes at R0/Δp = 8 and over an hour more with `fine` on 2 cores.
+/// −2.8 and −0.3 % (2026-11-29). The copper bar fails at 16. On a symmetry plane instead,
+/// reported beside them: a symmetry plane is a wall that also pulls, and it holds the face in
+/// tension where the radial release meets on the axis (`boundary`), so it is the same problem
+/// only while the face is pressed. The copper bar against the published results: length
+/// within 4 % and face within 5 % at R0/Δp = 16, reported at 8. About 6 minutes at
+/// R0/Δp = 8 and over an hour more with `fine` on 2 cores.
 pub fn taylor_walls(fine: bool) -> Result<Outcome> {
     let (length, face) = (21.445e-3, 14.2e-3);
     let source = "Kamoulakos 1990; Zhu & Cescotto 1995; Camacho & Ortiz 1997";

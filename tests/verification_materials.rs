@@ -161,9 +161,9 @@ fn taylor_bar_final_length_matches_the_finite_element_results() {
 /// Cook's OFHC copper rod (25.4 × 7.62 mm) at 190 m/s on the anvil (a `[[wall]]`) with the
 /// library's Johnson–Cook constants, against the recovered rod (L_f/L0 = 0.638,
 /// D_f/D0 = 1.78) at R0/Δp = 8 and 12: both figures converge toward the test (length +14.4 /
-/// +11.3 %, face −6.1 / −2.5 %, 2026-11-29), held within 12 % and 10 % at 12. The library's failure is
-/// off, as the rods were whole. With it on, the spall model breaks the rod (README, Not yet)
-/// and the test fails.
+/// +11.3 %, face −6.1 / −2.5 %, 2026-11-29), held within 12 % and 10 % at 12. The library's
+/// failure is off, as the rods were whole. With it on, the spall model breaks the rod (README,
+/// Not yet) and the test fails.
 #[test]
 fn ofhc_copper_taylor_rods_converge_to_johnson_and_cooks_tests() {
     validated(strike::validate::taylor_ofhc(false));
@@ -208,7 +208,7 @@ fn steinberg_guinan_flows_at_its_shocked_state() {
 /// `cargo test --release --test verification_materials -- --ignored`. It fails today on the
 /// copper bar: through the contact its face is narrower than on the wall (README, Not yet),
 /// by 4.5 % against its twin and 4.9 % on a fixed wall at R0/Δp = 16 (9.5 and 7.0 % at 8);
-/// the steel bar's by 0.3 and 0.4 %, the lengths within 0.3 % (by hand, 2026-11-29).
+/// the steel bar's by 0.3 and 0.4 %, the lengths within 0.3 % at 16 (by hand, 2026-11-29).
 #[test]
 #[ignore = "long (the validation command), and failing: the copper bar's face through the contact is 4.5–4.9 % narrower than on the wall at R0/Δp = 16 (README, Not yet)"]
 fn taylor_bars_converge_and_their_walls_agree() {
