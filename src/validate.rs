@@ -1384,12 +1384,15 @@ pub fn taylor_walls(fine: bool) -> Result<Outcome> {
     let mut checks = Vec::new();
     let spacings: &[f64] = if fine { &[0.4e-3, 0.2e-3] } else { &[0.4e-3] };
     for deck in ["taylor_bar", "taylor_copper"] {
-        // Each wall's face disagreement at the coarser spacing, for the convergence check.
-        let mut previous: Vec<(&'static str, Option<f64>)> = Vec::new();
+        // Each variant's face disagreement at the coarser spacing, for the convergence check
+        // (the variants come in the same order at every spacing).
+        let mut previous: Vec<Option<f64>> = Vec::new();
         for &dp in spacings {
             let ratio = (3.2e-3 / dp).round();
             let mut on_wall = None;
-            for (label, case) in taylor_variants(deck, dp)? {
+            let variants = taylor_variants(deck, dp)?;
+            previous.resize(variants.len(), None);
+            for (k, (label, case)) in variants.into_iter().enumerate() {
                 let r = taylor_run(&case)?;
                 let s = format!("{deck}, {label}, R0/Δp = {ratio}");
                 let Some((l0, d0)) = on_wall else {
@@ -1423,16 +1426,9 @@ pub fn taylor_walls(fine: bool) -> Result<Outcome> {
                     });
                 }
                 if label != "symmetry plane" {
-                    let k = match previous.iter().position(|(l, _)| *l == label) {
-                        Some(k) => k,
-                        None => {
-                            previous.push((label, None));
-                            previous.len() - 1
-                        }
-                    };
                     converges(
                         &mut checks,
-                        &mut previous[k].1,
+                        &mut previous[k],
                         (r.face / d0 - 1.0).abs(),
                         "face diameter against the wall's, finer against coarser",
                         &s,
