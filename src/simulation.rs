@@ -322,26 +322,25 @@ impl<const D: usize> Simulation<D> {
         // at the latest, when the real particles are also put back in cell order.
         self.ghosts.update(p, &self.symmetry);
         let wide = self.model.colour.is_some();
-        search_radii(p, wide, &mut self.h_search);
         let reorder = self.state.step >= self.state.last_reorder + REORDER_EVERY;
-        let mut need = if reorder || unbalanced {
-            Refresh::Full
-        } else {
-            self.neighbors.refresh(&p.x, &self.h_search)
-        };
-        if need == Refresh::Partial {
-            // Particles moved beyond the skin: the ghost layers must still reach 2 h_max.
-            let h_max = self.h_search.par_iter().copied().reduce(|| 0.0, f64::max);
-            if !self.ghosts.cover(p, &self.symmetry, 2.0 * h_max) {
-                need = Refresh::Full;
+        let mut need = Refresh::Full;
+        if !(reorder || unbalanced) {
+            let h = search_radii(p, wide, &mut self.h_search);
+            need = self.neighbors.refresh(&p.x, h);
+            if need == Refresh::Partial {
+                // Particles moved beyond the skin: the ghost layers must still reach 2 h_max.
+                let h_max = h.par_iter().copied().reduce(|| 0.0, f64::max);
+                if !self.ghosts.cover(p, &self.symmetry, 2.0 * h_max) {
+                    need = Refresh::Full;
+                }
             }
-        }
-        if need == Refresh::Partial {
-            let start = Instant::now();
-            self.neighbors.rebuild_dirty(&p.x, &self.h_search);
-            self.neighbors.classify(&p.body, true);
-            self.stats.partial_searches += 1;
-            self.busy += start.elapsed().as_secs_f64();
+            if need == Refresh::Partial {
+                let start = Instant::now();
+                self.neighbors.rebuild_dirty(&p.x, h);
+                self.neighbors.classify(&p.body, true);
+                self.stats.partial_searches += 1;
+                self.busy += start.elapsed().as_secs_f64();
+            }
         }
         if need == Refresh::Full {
             let reordered = reorder && self.state.step > 0;
@@ -363,16 +362,19 @@ impl<const D: usize> Simulation<D> {
             let old = (&self.parts[..], &times[..]);
             let order = reordered.then_some(&self.order[..]);
             self.parts = rebalance(self.ranks, p.n_real, &self.rates.particles, old, order);
+            // The permutation is needed again only at the next reordering, 50 steps on: kept,
+            // it would hold 8 bytes a particle through every step between.
+            self.order = Vec::new();
             if self.ranks.size() > 1 {
                 self.neighbors.own(self.parts[self.ranks.rank()].clone());
             }
-            search_radii(p, wide, &mut self.h_search);
-            let h_max = self.h_search.iter().copied().fold(0.0_f64, f64::max);
+            let h = search_radii(p, wide, &mut self.h_search);
+            let h_max = h.iter().copied().fold(0.0_f64, f64::max);
             let skin = SKIN * h_max;
             self.ghosts.rebuild(p, &self.symmetry, 2.0 * h_max + skin);
-            search_radii(p, wide, &mut self.h_search);
+            let h = search_radii(p, wide, &mut self.h_search);
             let start = Instant::now();
-            self.neighbors.build(&p.x, &self.h_search, p.n_real, skin);
+            self.neighbors.build(&p.x, h, p.n_real, skin);
             self.neighbors.classify(&p.body, false);
             self.stats.searches += 1;
             self.busy += start.elapsed().as_secs_f64();
@@ -736,13 +738,20 @@ fn rebalance<const D: usize>(
 }
 
 /// The neighbour search radius of each particle (ghosts included): its smoothing length, or
-/// max(h, h0) when the colour contact law, which acts over the reference support, is in use.
-fn search_radii<const D: usize>(p: &Particles<D>, wide: bool, out: &mut Vec<f64>) {
-    out.clear();
-    if wide {
-        out.par_extend(p.h.par_iter().zip(&p.h0).map(|(&h, &h0)| h.max(h0)));
+/// max(h, h0) when the colour contact law, which acts over the reference support, is in use
+/// (then written into `wide`, and a slice of it returned). Without the colour law the radii are
+/// `p.h` itself: a copy would cost 8 bytes a particle for nothing.
+fn search_radii<'a, const D: usize>(
+    p: &'a Particles<D>,
+    colour: bool,
+    wide: &'a mut Vec<f64>,
+) -> &'a [f64] {
+    wide.clear();
+    if colour {
+        wide.par_extend(p.h.par_iter().zip(&p.h0).map(|(&h, &h0)| h.max(h0)));
+        wide
     } else {
-        out.extend_from_slice(&p.h);
+        &p.h
     }
 }
 
