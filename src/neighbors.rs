@@ -76,14 +76,19 @@ pub struct NeighborList {
     /// axis), and (sparse) key-index pairs for sorting.
     coords: Vec<[i32; 3]>,
     keyed: Vec<(u64, u32)>,
-    /// Positions and support radii (h + skin/2) in cell order, so that scanning a run of
-    /// candidates reads memory in sequence.
-    xs: Vec<Vector<3>>,
+    /// Positions (from the grid's corner, single precision: see [`rounding`]) and support
+    /// radii (h + skin/2) in cell order, so that scanning a run of candidates reads memory in
+    /// sequence.
+    xs: Vec<[f32; 3]>,
     hs: Vec<f64>,
-    /// Skin of the last build, and the positions and smoothing lengths it was built for.
+    /// Skin of the last build, and the positions and smoothing lengths it was built for, in
+    /// single precision (positions from `origin`): 12 + 4 bytes a particle in 3D instead of
+    /// 24 + 8. `slack` bounds what their rounding can hide (see [`NeighborList::refresh`]).
     skin: f64,
-    x_built: Vec<f64>,
-    h_built: Vec<f64>,
+    origin: [f64; 3],
+    x_built: Vec<f32>,
+    h_built: Vec<f32>,
+    slack: f64,
     /// Blocks of BLOCK_CELLS³ cells of the last full build (dense grids only): their width,
     /// counts per axis, members (all particles, by block) and start of each in `members`.
     block_width: f64,
@@ -242,11 +247,11 @@ impl NeighborList {
         if self.h_built.len() != h.len() || self.x_built.len() != D * x.len() {
             return Refresh::Full;
         }
-        let x_built = &self.x_built;
+        let (x_built, origin) = (&self.x_built, self.origin);
         let disp = |i: usize| -> [f64; 3] {
             let mut d = [0.0; 3];
             for k in 0..D {
-                d[k] = x[i][k] - x_built[D * i + k];
+                d[k] = x[i][k] - (origin[k] + f64::from(x_built[D * i + k]));
             }
             d
         };
@@ -256,7 +261,7 @@ impl NeighborList {
                 let d = disp(i);
                 (
                     d[0] * d[0] + d[1] * d[1] + d[2] * d[2],
-                    h[i] - self.h_built[i],
+                    h[i] - f64::from(self.h_built[i]),
                     h[i],
                 )
             })
@@ -264,11 +269,14 @@ impl NeighborList {
                 || (0.0, 0.0, 0.0),
                 |a, b| (a.0.max(b.0), a.1.max(b.1), a.2.max(b.2)),
             );
-        let (d_max, grow) = (d2.sqrt(), 2.0 * dh.max(0.0));
-        if 2.0 * d_max + grow < self.skin && self.dirty_count == 0 {
+        // The stored positions and smoothing lengths are rounded: every displacement may be
+        // longer than it reads by up to √D·e and every growth larger by e_h, so the tests below
+        // take `slack` = 2 √D e + 2 e_h out of the skin (see [`rounding`]).
+        let (d_max, grow, slack) = (d2.sqrt(), 2.0 * dh.max(0.0), self.slack);
+        if 2.0 * d_max + grow + slack < self.skin && self.dirty_count == 0 {
             return Refresh::Valid;
         }
-        if self.block_start.is_empty() || 2.0 * h_max + 2.0 * d_max > self.block_width {
+        if self.block_start.is_empty() || 2.0 * h_max + 2.0 * d_max + slack > self.block_width {
             return Refresh::Full;
         }
         // Displacement box of each block.
@@ -319,7 +327,7 @@ impl NeighborList {
                     let e = (own[1][k] - union[0][k]).max(union[1][k] - own[0][k]);
                     far2 += e * e;
                 }
-                *dirty = far2.sqrt() + grow >= skin;
+                *dirty = far2.sqrt() + grow + slack >= skin;
             });
         let dirty_block = &self.dirty_block;
         let n_real = self.n_lists;
@@ -373,11 +381,18 @@ impl NeighborList {
     pub fn build<const D: usize>(&mut self, x: &[Vector<D>], h: &[f64], n_real: usize, skin: f64) {
         let n = x.len();
         self.skin = skin;
+        let (lo, extent) = bounds(x);
+        self.origin = [0.0; 3];
+        self.origin[..D].copy_from_slice(&lo[..D]);
         self.x_built.clear();
-        self.x_built
-            .par_extend(x.par_iter().flat_map_iter(|p| p.iter().copied()));
+        self.x_built.par_extend(
+            x.par_iter()
+                .flat_map_iter(|p| (0..D).map(move |k| (p[k] - lo[k]) as f32)),
+        );
         self.h_built.clear();
-        self.h_built.extend_from_slice(h);
+        self.h_built.extend(h.iter().map(|&v| v as f32));
+        let h_max = h.iter().copied().fold(0.0_f64, f64::max);
+        self.slack = 2.0 * (D as f64).sqrt() * rounding(extent) + 2.0 * rounding(h_max);
         self.n_lists = n_real;
         self.chunks
             .resize_with(n_real.div_ceil(CHUNK), ListChunk::default);
@@ -433,14 +448,19 @@ impl NeighborList {
         grid: Grid<D>,
         dirty_only: bool,
     ) {
+        let lo = grid.lo;
         self.xs.clear();
         self.xs.par_extend(self.sorted.par_iter().map(|&j| {
-            let mut p = Vector::<3>::zeros();
+            let mut p = [0.0_f32; 3];
             for k in 0..D {
-                p[k] = x[j as usize][k];
+                p[k] = (x[j as usize][k] - lo[k]) as f32;
             }
             p
         }));
+        // A candidate's rounded position reads its distance wrong by up to √D e: the test is
+        // widened by that much, so that no pair within the support (plus skin) is missed; the
+        // few extra entries are dropped by the lists' users, as the skin's are.
+        let widen = (D as f64).sqrt() * rounding(bounds(x).1);
         self.hs.clear();
         self.hs
             .par_extend(self.sorted.par_iter().map(|&j| h[j as usize] + 0.5 * skin));
@@ -461,14 +481,20 @@ impl NeighborList {
             // Runs along the last axis for every offset of the other axes.
             let lo_last = (c[last] - REACH).max(0);
             let hi_last = (c[last] + REACH).min(grid.dims[last] - 1);
-            let mut xi3 = Vector::<3>::zeros();
+            let mut xi3 = [0.0_f64; 3];
             for k in 0..D {
-                xi3[k] = xi[k];
+                xi3[k] = xi[k] - lo[k];
             }
             let mut visit = |a: usize, b: usize| {
                 for k in a..b {
-                    let support = hi + hs[k];
-                    if (xi3 - xs[k]).norm_squared() < support * support && sorted[k] as usize != i {
+                    let support = hi + hs[k] + widen;
+                    let r2: f64 = (0..3)
+                        .map(|a| {
+                            let d = xi3[a] - f64::from(xs[k][a]);
+                            d * d
+                        })
+                        .sum();
+                    if r2 < support * support && sorted[k] as usize != i {
                         list.push(sorted[k]);
                     }
                 }
@@ -612,6 +638,29 @@ impl NeighborList {
     }
 }
 
+/// The lowest corner of the points `x` and the largest extent of their box.
+fn bounds<const D: usize>(x: &[Vector<D>]) -> ([f64; D], f64) {
+    let mut lo = [f64::INFINITY; D];
+    let mut hi = [f64::NEG_INFINITY; D];
+    for p in x {
+        for k in 0..D {
+            lo[k] = lo[k].min(p[k]);
+            hi[k] = hi[k].max(p[k]);
+        }
+    }
+    let extent = (0..D).map(|k| hi[k] - lo[k]).fold(0.0, f64::max);
+    (lo, extent)
+}
+
+/// A bound on the error of a length of at most `magnitude` kept in single precision (round to
+/// nearest: half an ulp, 2⁻²⁴ of it), doubled for the double-precision arithmetic around it.
+/// Positions are kept from a corner of their box, so the bound follows the box's size, not
+/// where the box lies: a 0.1 m domain is read to 1.2e-8 m, a thousandth of the skin of a 0.1 mm
+/// lattice.
+fn rounding(magnitude: f64) -> f64 {
+    magnitude * f64::from(f32::EPSILON)
+}
+
 /// Counting sort of the items by `key` (< `count`): O(N), stable (index order within a key).
 /// `start[k]..start[k + 1]` are the positions in `sorted` of the items with key k; `fill` is
 /// a work buffer.
@@ -656,13 +705,30 @@ mod tests {
             .collect()
     }
 
+    /// The lists hold every pair within the support, in index order, and nothing beyond it but
+    /// pairs within the rounding of the single-precision positions (see [`rounding`]).
     fn compare<const D: usize>(x: &[Vector<D>], h: &[f64], n_real: usize) {
         let mut nl = NeighborList::default();
         nl.build(x, h, n_real, 0.0);
         let expect = brute(x, h, n_real);
         assert_eq!(nl.len(), n_real);
+        let widen = 2.0 * (D as f64).sqrt() * rounding(bounds(x).1);
         for (i, expect) in expect.iter().enumerate() {
-            assert_eq!(nl.list(i), expect, "particle {i}");
+            let list = nl.list(i);
+            assert!(
+                list.windows(2).all(|w| w[0] < w[1]),
+                "particle {i}: {list:?}"
+            );
+            for j in expect {
+                assert!(list.contains(j), "particle {i} misses {j}");
+            }
+            for &j in list {
+                let j = j as usize;
+                assert!(
+                    (x[i] - x[j]).norm() < h[i] + h[j] + widen,
+                    "particle {i} lists {j}, beyond its support"
+                );
+            }
         }
     }
 

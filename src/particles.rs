@@ -276,11 +276,14 @@ pub fn from3<const D: usize>(a: [f64; 3]) -> Vector<D> {
 /// in 3D, 24 B in 2D) and the neighbour record grew by 24 B: 1223 B measured at 10⁶ in 3D;
 /// the other three add the same fields' sizes to their measurements. Since 2026-11-29 S, b and
 /// D keep one triangle ([`Sym`]) and u is single precision: 72 B less in 3D (1151 B measured
-/// at 10⁶), 8 B in 2D.
+/// at 10⁶), 8 B in 2D. Since 2026-11-29, later, the search keeps its copies of the positions
+/// and smoothing lengths in single precision and no copy of h (`neighbors`): 1121 B measured
+/// at 10⁶ in 3D (1182 B at the peak of 52 steps of `strike run`), 1457 B in CN-SPH, 737 B and
+/// 942 B in 2D (3 steps of `strike run`), the 2D estimates lowered to stay within 10 %.
 pub fn estimated_bytes_per_particle(dimension: usize, corrected: bool) -> usize {
     match (dimension, corrected) {
-        (2, false) => 840,
-        (2, true) => 1040,
+        (2, false) => 800,
+        (2, true) => 1010,
         (_, false) => 1200,
         (_, true) => 1550,
     }
