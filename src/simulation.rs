@@ -739,17 +739,17 @@ fn rebalance<const D: usize>(
 
 /// The neighbour search radius of each particle (ghosts included): its smoothing length, or
 /// max(h, h0) when the colour contact law, which acts over the reference support, is in use
-/// (then written into `wide`, and a slice of it returned). Without the colour law the radii are
-/// `p.h` itself: a copy would cost 8 bytes a particle for nothing.
+/// (`colour`; the radii are then written into `out` and returned from it). Without the colour
+/// law the radii are `p.h` itself: a copy would cost 8 bytes a particle for nothing.
 fn search_radii<'a, const D: usize>(
     p: &'a Particles<D>,
     colour: bool,
-    wide: &'a mut Vec<f64>,
+    out: &'a mut Vec<f64>,
 ) -> &'a [f64] {
-    wide.clear();
+    out.clear();
     if colour {
-        wide.par_extend(p.h.par_iter().zip(&p.h0).map(|(&h, &h0)| h.max(h0)));
-        wide
+        out.par_extend(p.h.par_iter().zip(&p.h0).map(|(&h, &h0)| h.max(h0)));
+        out
     } else {
         &p.h
     }
