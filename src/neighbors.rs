@@ -152,7 +152,9 @@ pub enum Refresh {
 /// The cell geometry of one build.
 #[derive(Debug, Clone, Copy)]
 struct Grid<const D: usize> {
+    /// The particles' box: its lowest corner and its largest side.
     lo: Vector<D>,
+    extent: f64,
     cell: f64,
     dims: [i64; 3],
     dense: bool,
@@ -381,18 +383,8 @@ impl NeighborList {
     pub fn build<const D: usize>(&mut self, x: &[Vector<D>], h: &[f64], n_real: usize, skin: f64) {
         let n = x.len();
         self.skin = skin;
-        let (lo, extent) = bounds(x);
-        self.origin = [0.0; 3];
-        self.origin[..D].copy_from_slice(&lo[..D]);
         self.x_built.clear();
-        self.x_built.par_extend(
-            x.par_iter()
-                .flat_map_iter(|p| (0..D).map(move |k| (p[k] - lo[k]) as f32)),
-        );
         self.h_built.clear();
-        self.h_built.extend(h.iter().map(|&v| v as f32));
-        let h_max = h.iter().copied().fold(0.0_f64, f64::max);
-        self.slack = 2.0 * (D as f64).sqrt() * rounding(extent) + 2.0 * rounding(h_max);
         self.n_lists = n_real;
         self.chunks
             .resize_with(n_real.div_ceil(CHUNK), ListChunk::default);
@@ -406,6 +398,18 @@ impl NeighborList {
             return;
         }
         let grid = self.bin(x, h, skin);
+        // The positions and smoothing lengths of this build, from the grid's corner, in single
+        // precision, and the slack their rounding asks of the skin (see `refresh`).
+        let lo = grid.lo;
+        self.origin = [0.0; 3];
+        self.origin[..D].copy_from_slice(lo.as_slice());
+        self.x_built.par_extend(
+            x.par_iter()
+                .flat_map_iter(|p| (0..D).map(move |k| (p[k] - lo[k]) as f32)),
+        );
+        self.h_built.extend(h.iter().map(|&v| v as f32));
+        let h_max = h.iter().copied().fold(0.0_f64, f64::max);
+        self.slack = 2.0 * (D as f64).sqrt() * rounding(grid.extent) + 2.0 * rounding(h_max);
         if grid.dense {
             self.make_blocks(&grid);
         }
@@ -460,7 +464,7 @@ impl NeighborList {
         // A candidate's rounded position reads its distance wrong by up to √D e: the test is
         // widened by that much, so that no pair within the support (plus skin) is missed; the
         // few extra entries are dropped by the lists' users, as the skin's are.
-        let widen = (D as f64).sqrt() * rounding(bounds(x).1);
+        let widen = (D as f64).sqrt() * rounding(grid.extent);
         self.hs.clear();
         self.hs
             .par_extend(self.sorted.par_iter().map(|&j| h[j as usize] + 0.5 * skin));
@@ -597,6 +601,7 @@ impl NeighborList {
         let dense = total <= (DENSE_CELLS_PER_PARTICLE * n + 64) as f64;
         let grid = Grid {
             lo,
+            extent: (hi - lo).max(),
             cell,
             dims,
             dense,
@@ -636,20 +641,6 @@ impl NeighborList {
         }
         grid
     }
-}
-
-/// The lowest corner of the points `x` and the largest extent of their box.
-fn bounds<const D: usize>(x: &[Vector<D>]) -> ([f64; D], f64) {
-    let mut lo = [f64::INFINITY; D];
-    let mut hi = [f64::NEG_INFINITY; D];
-    for p in x {
-        for k in 0..D {
-            lo[k] = lo[k].min(p[k]);
-            hi[k] = hi[k].max(p[k]);
-        }
-    }
-    let extent = (0..D).map(|k| hi[k] - lo[k]).fold(0.0, f64::max);
-    (lo, extent)
 }
 
 /// A bound on the error of a length of at most `magnitude` kept in single precision (round to
@@ -712,7 +703,10 @@ mod tests {
         nl.build(x, h, n_real, 0.0);
         let expect = brute(x, h, n_real);
         assert_eq!(nl.len(), n_real);
-        let widen = 2.0 * (D as f64).sqrt() * rounding(bounds(x).1);
+        let (lo, hi) = x
+            .iter()
+            .fold((x[0], x[0]), |(l, u), p| (l.inf(p), u.sup(p)));
+        let widen = 2.0 * (D as f64).sqrt() * rounding((hi - lo).max());
         for (i, expect) in expect.iter().enumerate() {
             let list = nl.list(i);
             assert!(
