@@ -314,14 +314,14 @@ impl<const D: usize> Simulation<D> {
     /// Advance one step, of at most `dt_max`. On instability the particles are left at t_n
     /// (the last good state) and the error names the particle, its body, place and cause.
     ///
-    /// The step runs on a worker of the thread pool (`rayon::scope`; directly where the caller
-    /// is one already), so that its twenty-odd parallel loops start from inside the pool. Called
-    /// from outside, each loop would be handed to the pool and the caller put to sleep until
-    /// it ends, and a step of a few thousand particles costs little more than those hand-overs:
-    /// the 2D bars of `tests/verification_contact.rs` spent as much time in the kernel
-    /// (sched_yield, futex) as in the arithmetic, and ran 1.8× longer. Under MPI the step stays
-    /// on the calling thread, the one that initialised MPI (`Threading::Funneled`). The
-    /// arithmetic is the same either way.
+    /// The step runs on a worker of the thread pool (`rayon::scope`; in place where the caller
+    /// is one already, as `strike run`'s thread is), so that its twenty-odd parallel loops start
+    /// from inside the pool. Called from outside, each loop would be handed to the pool with the
+    /// caller asleep on a futex until it ended: for a step of a few thousand particles that
+    /// costs as much as the arithmetic (the 2D bars of `tests/verification_contact.rs` spent
+    /// 105 s in the kernel, sched_yield and futex, beside 121 s of user time, and ran 1.8×
+    /// longer). Under MPI the step stays on the calling thread, the one MPI was initialised for
+    /// (`ranks::start`). The arithmetic is the same either way.
     pub fn step(&mut self, dt_max: f64) -> Result<Diagnostics> {
         if self.ranks.size() > 1 {
             self.advance(dt_max)
