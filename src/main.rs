@@ -250,16 +250,16 @@ fn main_inner(ranks: Ranks) -> Result<(), (Report, bool)> {
                 stop: Some(stop_flag().map_err(plain)?),
                 ranks,
             };
-            // On one rank the run's own thread is one of the pool's workers, so that each
-            // parallel pass starts from inside the pool: from outside it, each pass handed its
-            // work to the pool and slept on a futex until woken (5 % of a run's time, in system
-            // calls, by `perf`). Under MPI the main thread keeps the run: MPI is initialised for
-            // calls from it alone (`ranks::start`).
+            // The run's own thread is one of the pool's workers, so that each parallel pass
+            // starts from inside the pool: from outside it, each pass handed its work to the
+            // pool and slept on a futex until woken (5 % of a run's time, in system calls, by
+            // `perf`). Under an MPI that allows calls from one thread at a time only from the
+            // main one, the main thread keeps the run (`ranks::steps_in_pool`).
             #[allow(clippy::result_large_err)] // the run's own error, passed on as it is
-            let summary = if ranks.size() > 1 {
-                run::run(&c, &opts)
-            } else {
+            let summary = if strike::ranks::steps_in_pool(ranks) {
                 rayon::scope(|_| run::run(&c, &opts))
+            } else {
+                run::run(&c, &opts)
             };
             let summary = summary.map_err(|e| {
                 let interrupted = matches!(e, Error::Interrupted { .. });

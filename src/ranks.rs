@@ -180,6 +180,21 @@ pub fn fill<T: Send + Default + Clone>(
         .for_each(|(k, o)| *o = f(start + k));
 }
 
+/// Whether MPI may be called from any thread, one at a time (`Threading::Serialized`).
+#[cfg(feature = "mpi")]
+static SERIALIZED: std::sync::atomic::AtomicBool = std::sync::atomic::AtomicBool::new(false);
+
+/// Whether a step may run on a worker of rayon's pool: always on one rank; under MPI where
+/// MPI was initialised for calls from any thread, one at a time.
+pub fn steps_in_pool(ranks: Ranks) -> bool {
+    #[cfg(feature = "mpi")]
+    if ranks.size() > 1 {
+        return SERIALIZED.load(std::sync::atomic::Ordering::Relaxed);
+    }
+    let _ = ranks;
+    true
+}
+
 /// Keeps MPI initialised for the life of the process (finalised when dropped).
 pub struct Session {
     #[cfg(feature = "mpi")]
@@ -199,11 +214,19 @@ pub fn start() -> Session {
         ]
         .iter()
         .any(|v| std::env::var_os(v).is_some());
-        // MPI is called from the main thread only; rayon's workers never call it.
+        // MPI is called by one thread at a time: the step's, a worker of rayon's pool where
+        // MPI allows it (`Threading::Serialized`, see `Simulation::step`), else the main one.
         let universe = launched
-            .then(|| mpi::initialize_with_threading(mpi::Threading::Funneled))
+            .then(|| mpi::initialize_with_threading(mpi::Threading::Serialized))
             .flatten()
-            .map(|(u, _)| u);
+            .map(|(u, provided)| {
+                let any_thread = matches!(
+                    provided,
+                    mpi::Threading::Serialized | mpi::Threading::Multiple
+                );
+                SERIALIZED.store(any_thread, std::sync::atomic::Ordering::Relaxed);
+                u
+            });
         Session {
             _universe: universe,
         }

@@ -320,13 +320,13 @@ impl<const D: usize> Simulation<D> {
     /// caller asleep on a futex until it ended: for a step of a few thousand particles that
     /// costs as much as the arithmetic (the 2D bars of `tests/verification_contact.rs` spent
     /// 105 s in the kernel, sched_yield and futex, beside 121 s of user time, and ran 1.8×
-    /// longer). Under MPI the step stays on the calling thread, the one MPI was initialised for
-    /// (`ranks::start`). The arithmetic is the same either way.
+    /// longer). Under an MPI that takes calls from the main thread only, the step stays on the
+    /// calling thread (`ranks::steps_in_pool`). The arithmetic is the same either way.
     pub fn step(&mut self, dt_max: f64) -> Result<Diagnostics> {
-        if self.ranks.size() > 1 {
-            self.advance(dt_max)
-        } else {
+        if crate::ranks::steps_in_pool(self.ranks) {
             rayon::scope(|_| self.advance(dt_max))
+        } else {
+            self.advance(dt_max)
         }
     }
 
