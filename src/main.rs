@@ -253,8 +253,8 @@ fn main_inner(ranks: Ranks) -> Result<(), (Report, bool)> {
             // The run's own thread is one of the pool's workers, so that each parallel pass
             // starts from inside the pool: from outside it, each pass handed its work to the
             // pool and slept on a futex until woken (5 % of a run's time, in system calls, by
-            // `perf`). Under an MPI that allows calls from one thread at a time only from the
-            // main one, the main thread keeps the run (`ranks::steps_in_pool`).
+            // `perf`). Where MPI takes calls from the main thread only (it did not grant
+            // `Threading::Serialized`), the main thread keeps the run (`ranks::steps_in_pool`).
             #[allow(clippy::result_large_err)] // the run's own error, passed on as it is
             let summary = if strike::ranks::steps_in_pool(ranks) {
                 rayon::scope(|_| run::run(&c, &opts))
