@@ -5,7 +5,8 @@
 //! passes, full and partial searches, a reordering and the ranks' rebalancing).
 //!
 //! The test builds the `mpi` binary itself (tests/support/provision_mpi.sh, which installs
-//! OpenMPI where it is missing), in its own target directory.
+//! OpenMPI where it is missing), in its own target directory, seeded with the dependencies
+//! the test build has compiled already.
 
 mod support;
 
@@ -22,9 +23,12 @@ fn mpi_strike() -> PathBuf {
         let lock = std::fs::File::create(tmp.join("mpi-build.lock")).unwrap();
         lock.lock().unwrap();
         let script = Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/support/provision_mpi.sh");
+        // The build running the tests: its release directory seeds the mpi build's.
+        let release = tmp.parent().map(|t| t.join("release")).unwrap_or_default();
         let out = Command::new("bash")
             .arg(&script)
             .arg(tmp.join("mpi-target"))
+            .arg(release)
             .output()
             .unwrap_or_else(|e| panic!("cannot run {}: {e}", script.display()));
         assert!(
