@@ -3,10 +3,10 @@
 # binary's path, for tests/mpi.rs. "$2", if given, is the release directory of the build that
 # runs the tests: a new target directory starts from a copy of its dependencies' artifacts, so
 # that only strike and the crates the feature adds (or builds with other features) are
-# compiled (2 min 28 s → 1 min 6 s on this 2-core VM). Installs Debian's OpenMPI (libopenmpi-dev, openmpi-bin) and
-# libclang-dev (the MPI bindings' build runs bindgen) only where they are missing and apt-get
-# can be used (root, or sudo without a password). Called by the test itself, under a lock:
-# `cargo test --release` needs no step before it.
+# compiled (2 min 28 s → 1 min 6 s on this 2-core VM). Installs Debian's OpenMPI
+# (libopenmpi-dev, openmpi-bin) and libclang-dev (the MPI bindings' build runs bindgen) only
+# where they are missing and apt-get can be used (root, or sudo without a password). Called
+# by the test itself, under a lock: `cargo test --release` needs no step before it.
 set -euo pipefail
 target="$1"
 seed="${2:-}"
