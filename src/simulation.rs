@@ -15,6 +15,7 @@ use crate::physics::{self, Model, Rates};
 use crate::ranks::Ranks;
 use crate::setup;
 use rayon::prelude::*;
+use std::any::Any;
 use std::ops::Range;
 use std::time::Instant;
 
@@ -210,9 +211,52 @@ const IMBALANCE: f64 = 1.1;
 /// Verlet skin of the neighbour lists, as a fraction of the largest smoothing length.
 pub const SKIN: f64 = 0.1;
 
+/// The library's one compiled copy of a run in 2D and in 3D. `Simulation::new` and `step` are
+/// generic in D, and a crate that calls a generic function compiles its own copy of it and of
+/// everything it calls: each integration test that ran a `Simulation` compiled the whole
+/// physics again (45–97 s apiece in release, half of the test build). The generic methods
+/// therefore only pick one of these non-generic functions, which other crates link to.
+#[inline(never)]
+fn new_2d(case: &Case) -> Result<Simulation<2>> {
+    Simulation::set_up(case)
+}
+
+#[inline(never)]
+fn new_3d(case: &Case) -> Result<Simulation<3>> {
+    Simulation::set_up(case)
+}
+
+#[inline(never)]
+fn step_2d(sim: &mut Simulation<2>, dt_max: f64) -> Result<Diagnostics> {
+    sim.step_here(dt_max)
+}
+
+#[inline(never)]
+fn step_3d(sim: &mut Simulation<3>, dt_max: f64) -> Result<Diagnostics> {
+    sim.step_here(dt_max)
+}
+
+/// The error of a dimension other than 2 or 3.
+fn no_dimension(d: usize) -> Error {
+    Error::Invalid(format!("strike runs in 2 or 3 dimensions, not {d}"))
+}
+
 impl<const D: usize> Simulation<D> {
-    /// Set up a case (the deck's dimension must be D).
+    /// Set up a case (the deck's dimension must be D, 2 or 3).
     pub fn new(case: &Case) -> Result<Self> {
+        // Through the non-generic `new_2d` / `new_3d` (see there); the downcast only names the
+        // type that D already is.
+        let mut made: Option<Result<Self>> = None;
+        let slot: &mut dyn Any = &mut made;
+        if let Some(slot) = slot.downcast_mut::<Option<Result<Simulation<2>>>>() {
+            *slot = Some(new_2d(case));
+        } else if let Some(slot) = slot.downcast_mut::<Option<Result<Simulation<3>>>>() {
+            *slot = Some(new_3d(case));
+        }
+        made.unwrap_or_else(|| Err(no_dimension(D)))
+    }
+
+    fn set_up(case: &Case) -> Result<Self> {
         let (particles, model) = setup::build::<D>(case)?;
         let n = particles.n_real;
         let v0 = (0..n).map(|i| particles.v[i].norm()).fold(0.0, f64::max);
@@ -323,6 +367,18 @@ impl<const D: usize> Simulation<D> {
     /// longer). Under an MPI that takes calls from the main thread only, the step stays on the
     /// calling thread (`ranks::steps_in_pool`). The arithmetic is the same either way.
     pub fn step(&mut self, dt_max: f64) -> Result<Diagnostics> {
+        // Through the non-generic `step_2d` / `step_3d` (see `new_2d`).
+        let sim: &mut dyn Any = self;
+        if let Some(sim) = sim.downcast_mut::<Simulation<2>>() {
+            return step_2d(sim, dt_max);
+        }
+        if let Some(sim) = sim.downcast_mut::<Simulation<3>>() {
+            return step_3d(sim, dt_max);
+        }
+        Err(no_dimension(D))
+    }
+
+    fn step_here(&mut self, dt_max: f64) -> Result<Diagnostics> {
         if crate::ranks::steps_in_pool(self.ranks) {
             rayon::scope(|_| self.advance(dt_max))
         } else {
