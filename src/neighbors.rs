@@ -115,6 +115,9 @@ pub struct NeighborList {
 /// Particles per chunk of lists (a power of two).
 const CHUNK_SHIFT: usize = 8;
 const CHUNK: usize = 1 << CHUNK_SHIFT;
+/// Particles per page: particle k lies on page k / PAGE, and the lists of the particles of page
+/// c are chunk c's (see [`NeighborList::named`]).
+pub const PAGE: usize = CHUNK;
 
 /// The neighbour lists of CHUNK consecutive real particles, one after another in one array of
 /// exactly their size. A vector per particle would cost its 24-byte header and, filled by
@@ -127,6 +130,8 @@ struct ListChunk {
     /// End of each particle's list in `items` (its start is the previous end, or 0).
     ends: Vec<u32>,
     items: Vec<u32>,
+    /// The real particles that `items` name lie in this range (see [`NeighborList::named`]).
+    named: std::ops::Range<usize>,
 }
 
 impl ListChunk {
@@ -209,6 +214,14 @@ impl NeighborList {
     #[inline]
     pub fn list(&self, i: usize) -> &[u32] {
         self.chunks[i >> CHUNK_SHIFT].list(i & (CHUNK - 1))
+    }
+
+    /// The range of indices within which lie the real particles that the lists of the
+    /// particles of page `c` ([`PAGE`] particles) name (empty where none, or where those lists
+    /// are not built here): what a pass over part of the particles needs of the rest
+    /// (`physics`, whose neighbour records are made a window of pages at a time).
+    pub fn named(&self, c: usize) -> std::ops::Range<usize> {
+        self.chunks.get(c).map_or(0..0, |chunk| chunk.named.clone())
     }
 
     /// Build the lists of only these real particles from the next full build on (an MPI
@@ -551,6 +564,7 @@ impl NeighborList {
                     chunk.ends.clear();
                     chunk.ends.resize(range.len(), 0);
                     chunk.items = Vec::new();
+                    chunk.named = 0..0;
                     return;
                 }
                 if dirty_only && !dirty[range.clone()].contains(&true) {
@@ -575,6 +589,21 @@ impl NeighborList {
                 chunk.items.clear();
                 chunk.items.reserve_exact(scratch.len());
                 chunk.items.extend_from_slice(scratch);
+                // Each list is sorted.
+                chunk.named = 0..0;
+                for k in 0..ends.len() {
+                    let start = if k == 0 { 0 } else { ends[k - 1] as usize };
+                    let list = &scratch[start..ends[k] as usize];
+                    let real = &list[..list.partition_point(|&j| (j as usize) < n_lists)];
+                    if let (Some(&a), Some(&b)) = (real.first(), real.last()) {
+                        let (a, b) = (a as usize, b as usize + 1);
+                        chunk.named = if chunk.named.is_empty() {
+                            a..b
+                        } else {
+                            chunk.named.start.min(a)..chunk.named.end.max(b)
+                        };
+                    }
+                }
             },
         );
     }
