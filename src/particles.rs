@@ -279,12 +279,16 @@ pub fn from3<const D: usize>(a: [f64; 3]) -> Vector<D> {
 /// at 10⁶), 8 B in 2D. Since 2026-11-29, later, the search keeps its copies of the positions
 /// and smoothing lengths in single precision and no copy of h (`neighbors`): 1121 B measured
 /// at 10⁶ in 3D (1182 B at the peak of 52 steps of `strike run`), 1457 B in CN-SPH, 737 B and
-/// 942 B in 2D (3 steps of `strike run`), the 2D estimates lowered to stay within 10 %.
+/// 942 B in 2D (3 steps of `strike run`), the 2D estimates lowered to stay within 10 %. Since
+/// 2026-11-30 the rate pass holds the neighbour records of a window of particles at a time
+/// (`physics`), not of all: 947 B measured at 10⁶ in 3D (the peak of 3 steps of `strike run`
+/// 1131 → 957 MB), 1284 B in CN-SPH (1433 before), 586 B and 769 B in 2D at 5·10⁵ (739 and
+/// 946 before).
 pub fn estimated_bytes_per_particle(dimension: usize, corrected: bool) -> usize {
     match (dimension, corrected) {
-        (2, false) => 800,
-        (2, true) => 1010,
-        (_, false) => 1200,
-        (_, true) => 1550,
+        (2, false) => 620,
+        (2, true) => 810,
+        (_, false) => 1000,
+        (_, true) => 1350,
     }
 }
