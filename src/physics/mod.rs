@@ -340,9 +340,12 @@ const WINDOWS: usize = 64;
 /// past the last ghost. The records are the same however many are held, so the pass's results
 /// do not depend on the windows. Finding a record costs a subtraction and a mask more than
 /// indexing one array of all of them (the comparison is the bounds check's; ghosts are few
-/// and the branch predictable), and the pass finds each neighbour's once: `strike bench`'s
-/// cubes ran 1.7 % fewer instructions a step than with one array (cachegrind, 2026-11-30), a
-/// page table (a slot per 256 particles) 5 % more.
+/// and the branch predictable), and the pass finds each neighbour's once. Over 42 steps of two
+/// cubes of 1728 particles on 1 thread (cachegrind, 2026-11-30) that came to 0.7 % fewer
+/// instructions than one array of all the records in conventional SPH and 3.4 % more in
+/// CN-SPH (whose marked supports had found each record once already); a page table (a slot
+/// per 256 particles) cost 5 % more, and the queue's loops written over indices instead of
+/// `step_by` 6 % more: the pass's code generation is that sensitive.
 #[derive(Clone, Copy)]
 struct Records<'a, const D: usize> {
     ring: &'a [Gather<D>],
@@ -2245,6 +2248,22 @@ mod tests {
         );
     }
 
+    /// Two aluminium blocks in contact (a at 50 m/s onto b) and a third welded to b, on a
+    /// lattice of `spacing`, the material's deck lines ending with `extra`.
+    fn three_bodies(spacing: f64, extra: &str) -> String {
+        let body = |name: &str, velocity: &str, min: &str, max: &str| {
+            format!(
+                "[[body]]\nname = \"{name}\"\nmaterial = \"al\"\nspacing = {spacing}\n{velocity}shape = {{ type = \"box\", min = [{min}], max = [{max}] }}\n"
+            )
+        };
+        format!(
+            "[simulation]\ndimension = 3\nend_time = 1.0\n[materials.al]\ndensity = 2700.0\neos = {{ type = \"linear\" }}\nstrength = {{ type = \"elastic\", youngs_modulus = 68.9e9, poissons_ratio = 0.33 }}\n{extra}\n{}{}{}[[interaction]]\nbodies = [\"b\", \"c\"]\ntype = \"welded\"\n",
+            body("a", "velocity = [50.0, 0.0, 0.0]\n", "-0.005, 0.0, 0.0", "0.0, 0.005, 0.005"),
+            body("b", "", "0.0, 0.0, 0.0", "0.006, 0.005, 0.005"),
+            body("c", "", "0.0, 0.006, 0.0", "0.006, 0.011, 0.005"),
+        )
+    }
+
     /// The AVX2 build of the pass adds the same numbers in the same order as the portable one,
     /// so a run gives the same bits on any x86-64 machine. Two bodies in contact with a welded
     /// third, artificial stress on, a seventh of the particles failed (their pairs cut, and the
@@ -2255,37 +2274,11 @@ mod tests {
             eprintln!("no AVX2 on this CPU: only the portable pass exists");
             return;
         }
-        let deck = r#"
-[simulation]
-name = "lanes"
-dimension = 3
-end_time = 1.0
-[materials.al]
-density = 2700.0
-eos = { type = "linear" }
-strength = { type = "elastic", youngs_modulus = 68.9e9, poissons_ratio = 0.33 }
-artificial_stress = 0.3
-[[body]]
-name = "a"
-material = "al"
-spacing = 1.0e-3
-velocity = [50.0, 0.0, 0.0]
-shape = { type = "box", min = [-0.005, 0.0, 0.0], max = [0.0, 0.005, 0.005] }
-[[body]]
-name = "b"
-material = "al"
-spacing = 1.0e-3
-shape = { type = "box", min = [0.0, 0.0, 0.0], max = [0.006, 0.005, 0.005] }
-[[body]]
-name = "c"
-material = "al"
-spacing = 1.0e-3
-shape = { type = "box", min = [0.0, 0.006, 0.0], max = [0.006, 0.011, 0.005] }
-[[interaction]]
-bodies = ["b", "c"]
-type = "welded"
-"#;
-        let case = crate::deck::parse(deck, "lanes.toml").unwrap();
+        let case = crate::deck::parse(
+            &three_bodies(1.0e-3, "artificial_stress = 0.3"),
+            "lanes.toml",
+        )
+        .unwrap();
         let (mut p, model) = crate::setup::build::<3>(&case).unwrap();
         let mut rnd = crate::validate::blocks::uniform(99);
         for i in 0..p.len() {
@@ -2413,36 +2406,7 @@ type = "welded"
     /// a rank's share. And it holds fewer records than there are particles.
     #[test]
     fn windows_of_records_give_the_whole_passs_rates() {
-        let deck = r#"
-[simulation]
-name = "windows"
-dimension = 3
-end_time = 1.0
-[materials.al]
-density = 2700.0
-eos = { type = "linear" }
-strength = { type = "elastic", youngs_modulus = 68.9e9, poissons_ratio = 0.33 }
-[[body]]
-name = "a"
-material = "al"
-spacing = 0.5e-3
-velocity = [50.0, 0.0, 0.0]
-shape = { type = "box", min = [-0.005, 0.0, 0.0], max = [0.0, 0.005, 0.005] }
-[[body]]
-name = "b"
-material = "al"
-spacing = 0.5e-3
-shape = { type = "box", min = [0.0, 0.0, 0.0], max = [0.006, 0.005, 0.005] }
-[[body]]
-name = "c"
-material = "al"
-spacing = 0.5e-3
-shape = { type = "box", min = [0.0, 0.006, 0.0], max = [0.006, 0.011, 0.005] }
-[[interaction]]
-bodies = ["b", "c"]
-type = "welded"
-"#;
-        let case = crate::deck::parse(deck, "windows.toml").unwrap();
+        let case = crate::deck::parse(&three_bodies(0.5e-3, ""), "windows.toml").unwrap();
         let (mut p, model) = crate::setup::build::<3>(&case).unwrap();
         let mut rnd = crate::validate::blocks::uniform(7);
         for i in 0..p.n_real {
