@@ -2367,31 +2367,11 @@ mod tests {
         assert!(n_marked > p.n_real / 2, "{n_marked} of {}", p.n_real);
         for wide in [true, false] {
             let (mut filtered, mut with) = (Rates::default(), Rates::default());
-            let fields = (&states[..], &b[..], &[][..]);
-            compute_rates_on(
-                CubicSpline,
-                &p,
-                &nl,
-                &model,
-                fields,
-                &all,
-                &mut filtered,
-                wide,
-                WINDOW_PAGES,
-            );
-            let fields = (&states[..], &b[..], &marked[..]);
-            let w = WINDOW_PAGES;
-            compute_rates_on(
-                CubicSpline,
-                &p,
-                &nl,
-                &model,
-                fields,
-                &all,
-                &mut with,
-                wide,
-                w,
-            );
+            for (marks, out) in [(&[][..], &mut filtered), (&marked[..], &mut with)] {
+                let fields = (&states[..], &b[..], marks);
+                let w = WINDOW_PAGES;
+                compute_rates_on(CubicSpline, &p, &nl, &model, fields, &all, out, wide, w);
+            }
             assert!(filtered.particles.iter().any(|r| r.acc.norm() > 0.0));
             for (i, (a, b)) in filtered.particles.iter().zip(&with.particles).enumerate() {
                 assert_eq!(a, b, "CN-SPH, marked supports, particle {i} (wide: {wide})");
