@@ -404,16 +404,16 @@ impl<const D: usize> std::ops::Index<usize> for Records<'_, D> {
     }
 }
 
-/// Build the records of particles `range` into `out` (one each, in order): `all` particles,
-/// the padding record at `all`.
+/// Build the records of particles `range` into `out` (one each, in order), the padding
+/// record at index `p.len()`.
 fn build_records<const D: usize>(
     p: &Particles<D>,
     ratio: f64,
-    all: usize,
     range: Range<usize>,
     out: &mut [Gather<D>],
 ) {
     debug_assert_eq!(range.len(), out.len());
+    let all = p.len();
     out.par_iter_mut()
         .zip(range.into_par_iter())
         .with_min_len(64)
@@ -443,21 +443,14 @@ fn build_ring<const D: usize>(
     // Up to the ring's end, then on from its start.
     let first = range.len().min(cap - at);
     let (wrapped, from_at) = ring.split_at_mut(at);
-    let all = p.len();
     build_records(
         p,
         ratio,
-        all,
         range.start..range.start + first,
         &mut from_at[..first],
     );
-    build_records(
-        p,
-        ratio,
-        all,
-        range.start + first..range.end,
-        &mut wrapped[..range.len() - first],
-    );
+    let rest = range.start + first..range.end;
+    build_records(p, ratio, rest, &mut wrapped[..range.len() - first]);
 }
 
 /// What the pass reads besides the particle's own neighbour list.
@@ -773,7 +766,7 @@ fn compute_rates_on<const D: usize, K: Kernel>(
     tail.clear();
     tail.reserve_exact(all + 1 - split);
     tail.resize(all + 1 - split, Gather::padding());
-    build_records(p, ratio, all, split..all + 1, tail);
+    build_records(p, ratio, split..all + 1, tail);
     particles.resize(n, ParticleRates::default());
     if !any_failed {
         *cracks = CrackLists::default();
@@ -793,7 +786,7 @@ fn compute_rates_on<const D: usize, K: Kernel>(
         if any_failed {
             // One window, every record in `tail`.
             debug_assert_eq!(windows.len(), 1);
-            cracks.build(n, records, all, &p.damage, &p.p, nl, model, wide);
+            cracks.build(n, records, &p.damage, &p.p, nl, model, wide);
         }
         let pass = Pass {
             gather: records,
@@ -1533,7 +1526,8 @@ impl<const D: usize> CrackLists<D> {
     }
 
     /// The lists of the `n` real particles, and which particles are `cracked`. Whether a
-    /// particle has failed is read from `damage` (D ≥ 1, as [`Gather::of`] sets `failed`), 8
+    /// particle has failed is read from `damage` (D ≥ 1, as [`Gather::of`] sets `failed`; every
+    /// particle's, ghosts included, so that its length is the padding record's index), 8
     /// bytes a particle, so that only a failed neighbour's 200-byte record is read. The build
     /// was 3.8 % of a step of `strike bench`'s shocked steel cubes by `perf`, 2.4 % since.
     /// `pressure`: the pass's (ghosts included). `wide`: the test on 256-bit vectors (the CPU
@@ -1543,7 +1537,6 @@ impl<const D: usize> CrackLists<D> {
         &mut self,
         n: usize,
         gather: Records<D>,
-        all: usize,
         damage: &[f64],
         pressure: &[f64],
         nl: &NeighborList,
@@ -1597,7 +1590,7 @@ impl<const D: usize> CrackLists<D> {
         let mut cracked = std::mem::take(&mut self.cracked);
         cracked.clear();
         cracked.par_extend(
-            (0..all + 1)
+            (0..damage.len() + 1)
                 .into_par_iter()
                 .map(|i| !failed(i) && (i >= n || !nl.listed(i) || !self.range(i).is_empty())),
         );
@@ -2203,7 +2196,6 @@ mod tests {
         cracks.build(
             p.n_real,
             Records::whole(&gather),
-            p.len(),
             &p.damage,
             &p.p,
             &nl,
@@ -2379,8 +2371,8 @@ mod tests {
         }
     }
 
-    /// The pass in windows of one page, holding the records of only the pages a window's lists
-    /// name, gives the rates of one window holding them all to the bit: two bodies in contact
+    /// The pass in windows of one page, holding the records of only the real particles a
+    /// window's lists name, gives the rates of one window holding them all to the bit: two bodies in contact
     /// with a welded third on a symmetry plane across the fastest axis of the cell order (so
     /// that every window needs ghosts), conventional and CN-SPH, over all particles and over
     /// a rank's share. And it holds fewer records than there are particles.
