@@ -100,7 +100,7 @@ pub fn mixing<const D: usize, K: Kernel>(
         .fold(
             || vec![PairMixing::default(); pairs],
             |mut acc, i| {
-                particle(kernel, p, nl.list(i), i, spacing, &mut acc);
+                nl.with_list(i, |list| particle(kernel, p, list, i, spacing, &mut acc));
                 acc
             },
         )

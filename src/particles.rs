@@ -283,12 +283,16 @@ pub fn from3<const D: usize>(a: [f64; 3]) -> Vector<D> {
 /// 2026-11-30 the rate pass holds the neighbour records of a window of particles at a time
 /// (`physics`), not of all: 947 B measured at 10⁶ in 3D (the peak of 3 steps of `strike run`
 /// 1131 → 957 MB), 1284 B in CN-SPH (1433 before), 586 B and 769 B in 2D at 5·10⁵ (739 and
-/// 946 before).
+/// 946 before). Since 2026-11-30, later, the neighbour lists are packed (16-bit offsets,
+/// `neighbors`): 796 B measured by `strike bench` at 10⁶ in 3D (the peak of 3 steps of
+/// `strike run` 957 → 807 MB; two cubes in contact, 1.02·10⁶ particles, 1029 → 879 B, the
+/// colour states adding 72 B), 1133 B in CN-SPH (1284 before), 551 B and 733 B in 2D at 5·10⁵
+/// (587 and 768 before).
 pub fn estimated_bytes_per_particle(dimension: usize, corrected: bool) -> usize {
     match (dimension, corrected) {
-        (2, false) => 620,
-        (2, true) => 810,
-        (_, false) => 1000,
-        (_, true) => 1350,
+        (2, false) => 580,
+        (2, true) => 770,
+        (_, false) => 840,
+        (_, true) => 1190,
     }
 }

@@ -259,7 +259,6 @@ pub fn states<const D: usize, K: Kernel>(
         if !nl.mixed.get(i).copied().unwrap_or(true) {
             return ColourState::default();
         }
-        let list = nl.list(i);
         let (mut c, mut g) = (0.0, 0.0);
         let mut own = [0.0; 3];
         let mut near = false;
@@ -274,7 +273,7 @@ pub fn states<const D: usize, K: Kernel>(
                 w = kernel.w::<D>(0.0, h0i);
             }
         }
-        for &j in list {
+        for j in nl.list(i) {
             let j = j as usize;
             let bj = p.body[j];
             let r = (p.x[i] - p.x[j]).norm();

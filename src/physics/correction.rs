@@ -201,13 +201,14 @@ pub(crate) fn corrections_on<const D: usize, K: Kernel>(
         // Particles with no neighbour of another body (see `NeighborList::classify`) need no
         // check of the pair's bodies.
         let mixed = nl.mixed.get(i).copied().unwrap_or(true);
-        let list = nl.list(i);
-        #[cfg(target_arch = "x86_64")]
-        if wide {
-            // SAFETY: the CPU has AVX2 (asserted above).
-            return unsafe { correction_avx2(kernel, i, list, points, mixed, &counts) };
-        }
-        correction(kernel, i, list, points, mixed, &counts)
+        nl.with_list(i, |list| {
+            #[cfg(target_arch = "x86_64")]
+            if wide {
+                // SAFETY: the CPU has AVX2 (asserted above).
+                return unsafe { correction_avx2(kernel, i, list, points, mixed, &counts) };
+            }
+            correction(kernel, i, list, points, mixed, &counts)
+        })
     });
     out[owned.clone()].par_iter().filter(|c| c.fallback).count()
 }
@@ -555,7 +556,7 @@ pub fn shepard<const D: usize, K: Kernel>(
         .into_par_iter()
         .map(|i| {
             let mut s = p.volume(i) * kernel.w::<D>(0.0, p.h[i]);
-            for &j in nl.list(i) {
+            for j in nl.list(i) {
                 let j = j as usize;
                 if counts(i, j) != Counts::Body {
                     continue;
@@ -833,7 +834,7 @@ mod tests {
         for i in [6 + 6 * 12 + 6 * 144, 0] {
             let mut a = Tensor::<3>::zeros();
             let mut inside = 0;
-            for &j in nl.list(i) {
+            for j in nl.list(i) {
                 let j = j as usize;
                 let xij = p.x[i] - p.x[j];
                 let (r, h) = (xij.norm(), 0.5 * (p.h[i] + p.h[j]));

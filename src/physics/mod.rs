@@ -817,16 +817,16 @@ fn compute_rates_on<const D: usize, K: Kernel>(
                         // cubes 20 % in some builds).
                         let pass = pass;
                         let i = start + k;
-                        let list = nl.list(i);
-                        #[cfg(target_arch = "x86_64")]
-                        if wide {
-                            // SAFETY: the CPU has AVX2 (asserted above).
-                            *o = unsafe {
-                                particle_rates_avx2::<D, K, $art, $cn>(kernel, i, list, &pass)
-                            };
-                            return;
-                        }
-                        *o = particle_rates::<D, K, $art, $cn>(kernel, i, list, &pass);
+                        *o = nl.with_list(i, |list| {
+                            #[cfg(target_arch = "x86_64")]
+                            if wide {
+                                // SAFETY: the CPU has AVX2 (asserted above).
+                                return unsafe {
+                                    particle_rates_avx2::<D, K, $art, $cn>(kernel, i, list, &pass)
+                                };
+                            }
+                            particle_rates::<D, K, $art, $cn>(kernel, i, list, &pass)
+                        });
                     })
             };
         }
@@ -1562,7 +1562,7 @@ impl<const D: usize> CrackLists<D> {
                     if !failed(i) && nl.listed(i) {
                         // A plain loop: as `extend` over a `filter`, the test was a call per
                         // entry that the compiler did not inline.
-                        for &k in nl.list(i) {
+                        for k in nl.list(i) {
                             if failed(k as usize) {
                                 let gk = &g[k as usize];
                                 if joined(model, gi.body, gk.body) && within_support(gi, gk) {
@@ -1635,7 +1635,7 @@ impl<const D: usize> CrackLists<D> {
                         continue;
                     }
                     let gi = &gather[i];
-                    for &j in nl.list(i) {
+                    for j in nl.list(i) {
                         let ju = j as usize;
                         if (ju < i && has_list(ju)) || !this.cracked[ju] {
                             continue;
@@ -2217,12 +2217,18 @@ mod tests {
             // The pairs found before the pass ([`CrackLists::severed`]), found from either side
             // (or from i's alone where j has no list), in the list's order.
             let mut found = cracks.severed(i).iter();
-            for &j in nl.list(i) {
+            for j in nl.list(i) {
                 let j = j as usize;
                 if gather[j].failed || !within_support(&gather[i], &gather[j]) {
                     continue;
                 }
-                let whole = severed_by_definition((i, j), nl.list(i), &gather, joined, &p.p);
+                let whole = severed_by_definition(
+                    (i, j),
+                    &nl.list(i).collect::<Vec<_>>(),
+                    &gather,
+                    joined,
+                    &p.p,
+                );
                 let few = cracks.severs((i, j), Records::whole(&gather), joined);
                 assert_eq!(whole, few, "pair ({i}, {j})");
                 if let Some(open) = whole {
@@ -2633,7 +2639,7 @@ shape = { type = "rectangle", min = [0.0, 0.0], max = [8.0e-3, 6.0e-3] }
             let got = rates.particles[i].drho;
             // The mass-weighted sum over the same neighbours, by hand.
             let mut massed = 0.0;
-            for &j in nl.list(i) {
+            for j in nl.list(i) {
                 let j = j as usize;
                 let xij = p.x[i] - p.x[j];
                 let r = xij.norm();
@@ -2698,7 +2704,7 @@ shape = { type = "rectangle", min = [0.0, 0.0], max = [8.0e-3, 6.0e-3] }
             .unwrap();
         b[corner] *= 1.5;
         let after = all_rates(&p, &nl, &model, &b);
-        let neighbours: Vec<usize> = nl.list(corner).iter().map(|&j| j as usize).collect();
+        let neighbours: Vec<usize> = nl.list(corner).map(|j| j as usize).collect();
         assert!(neighbours.len() > 3);
         for i in (0..p.n_real).filter(|&i| i != corner) {
             assert_eq!(

@@ -306,7 +306,7 @@ fn check_overlap<const D: usize>(case: &Case, p: &Particles<D>) -> Result<()> {
     let mut nl = NeighborList::default();
     nl.build(&p.x, &h, p.len(), 0.0);
     for i in 0..p.len() {
-        for &j in nl.list(i) {
+        for j in nl.list(i) {
             let j = j as usize;
             let (bi, bj) = (p.body[i] as usize, p.body[j] as usize);
             if bi < bj {

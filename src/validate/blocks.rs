@@ -260,7 +260,7 @@ fn gradient<const D: usize>(
     let g = Vector::<D>::from_fn(|a, _| [0.7, -1.3, 2.1][a]);
     let f = |x: &Vector<D>| g.dot(x) + 3.0;
     let mut sum = Vector::<D>::zeros();
-    for &j in nl.list(i) {
+    for j in nl.list(i) {
         let j = j as usize;
         let xij = p.x[i] - p.x[j];
         let (r, h) = (xij.norm(), 0.5 * (p.h[i] + p.h[j]));
@@ -289,7 +289,7 @@ pub fn linear_field_errors<const D: usize>(n: usize, jitter: f64, which: &[usize
         e[1] = e[1].max(gradient(&p, &nl, i, &Tensor::<D>::identity()).norm());
         // A constant field 1: Σ_j V_j W_ij · 1, normalised by S_i and plain.
         let mut sum = p.volume(i) * CubicSpline.w::<D>(0.0, p.h[i]);
-        for &j in nl.list(i) {
+        for j in nl.list(i) {
             let j = j as usize;
             let (r, h) = ((p.x[i] - p.x[j]).norm(), 0.5 * (p.h[i] + p.h[j]));
             if r > 0.0 {
