@@ -181,7 +181,6 @@ pub fn advance<const D: usize>(
         .zip(p.h[..n].par_iter_mut())
         .zip(p.p[..n].par_iter_mut())
         .zip(p.c[..n].par_iter_mut())
-        .zip(p.contact_force[..n].par_iter_mut())
         .zip(p.u[..n].par_iter_mut())
         .zip(p.eh[..n].par_iter_mut())
         .zip(p.damage[..n].par_iter_mut())
@@ -200,16 +199,7 @@ pub fn advance<const D: usize>(
                     (
                         (
                             (
-                                (
-                                    (
-                                        (
-                                            (((((((((vh, a), x), rho), e), s), eps_p), h), pr), c),
-                                            fc,
-                                        ),
-                                        u,
-                                    ),
-                                    eh,
-                                ),
+                                (((((((((((vh, a), x), rho), e), s), eps_p), h), pr), c), u), eh),
                                 dmg,
                             ),
                             w_p,
@@ -317,7 +307,6 @@ pub fn advance<const D: usize>(
                 *h = smoothing_length::<D>(h0[i], mat.rho0 / *rho, lambda_max, model);
                 *pr = mat.damaged_pressure(p_eos, *dmg);
                 *c = mat.sound_speed_at(*rho, *e, p_eos);
-                *fc = rates.particles[i].contact_force;
             },
         );
 }

@@ -544,6 +544,8 @@ impl<const D: usize> Simulation<D> {
         // The corrections (and their supports) only where this step computed them.
         let marks = if cn { &self.corrections[..] } else { &[][..] };
         let fields = (&self.colour[..], &self.corr[..], marks);
+        // The pass writes the contact forces into the particles' own array, lent to it.
+        std::mem::swap(&mut self.rates.contact_force, &mut p.contact_force);
         match self.kernel {
             KernelKind::CubicSpline => {
                 physics::compute_rates(CubicSpline, p, nl, model, fields, owned, &mut self.rates)
@@ -552,9 +554,11 @@ impl<const D: usize> Simulation<D> {
                 physics::compute_rates(WendlandC2, p, nl, model, fields, owned, &mut self.rates)
             }
         }
+        std::mem::swap(&mut self.rates.contact_force, &mut p.contact_force);
         self.busy += lap.elapsed().as_secs_f64();
         lap = Instant::now();
         ranks.share(&mut self.rates.particles, parts);
+        ranks.share(&mut p.contact_force[..p.n_real], parts);
         self.exchanging += lap.elapsed().as_secs_f64();
         let rates = &self.rates.particles;
         let near = |i: usize| rates[i].min_interbody_gap.is_finite();
@@ -607,7 +611,7 @@ impl<const D: usize> Simulation<D> {
             .for_each(|(b, fb)| {
                 fb.fill([0.0; 3]);
                 for i in b * BLOCK..n.min((b + 1) * BLOCK) {
-                    let f = to3(&rates[i].contact_force);
+                    let f = to3(&p.contact_force[i]);
                     let fb = &mut fb[p.body[i] as usize];
                     for k in 0..3 {
                         fb[k] += f[k];

@@ -203,8 +203,6 @@ pub struct ColourState {
     /// Outward normal of its own body (welded bodies included), −Σ_k V0_k ∇_i W_ik over its own
     /// neighbours, unnormalised (≈ 1/h at a face, ≈ 0 inside).
     pub normal: [f64; 3],
-    /// Whether it has a contact neighbour within the support.
-    pub near: bool,
     /// The interface strain ε its colour reads (0 where it is not pressed).
     pub strain: f64,
 }
@@ -354,7 +352,6 @@ pub fn states<const D: usize, K: Kernel>(
         let mut s = ColourState {
             grad_sum: g,
             normal: own,
-            near,
             ..Default::default()
         };
         if let Some(law) = law.filter(|law| c > law.lattice.touching()) {

@@ -260,8 +260,6 @@ pub struct ParticleRates<const D: usize> {
     pub de_lag: f64,
     /// Velocity gradient L = ∂v/∂x.
     pub grad_v: Tensor<D>,
-    /// Contact force f_c (N).
-    pub contact_force: Vector<D>,
     /// Half the contact potential of each of the particle's contact pairs (J): the sum over
     /// particles is Φ.
     pub contact_energy: f64,
@@ -283,7 +281,6 @@ impl<const D: usize> Default for ParticleRates<D> {
             de: 0.0,
             de_lag: 0.0,
             grad_v: Tensor::zeros(),
-            contact_force: Vector::zeros(),
             contact_energy: 0.0,
             dt: f64::INFINITY,
             min_interbody_gap: f64::INFINITY,
@@ -296,6 +293,11 @@ impl<const D: usize> Default for ParticleRates<D> {
 #[derive(Debug, Default, Clone)]
 pub struct Rates<const D: usize> {
     pub particles: Vec<ParticleRates<D>>,
+    /// The contact force f_c (N) on each real particle (at least; the pass writes the first
+    /// `n_real`). The simulation lends the particles' own array
+    /// ([`crate::particles::Particles::contact_force`]) here for the pass and takes it back
+    /// after, so that the force is kept once (24 bytes a particle in 3D), not in both.
+    pub contact_force: Vec<Vector<D>>,
     /// What the pass reads of each neighbour, packed into one record so that a neighbour costs
     /// few cache lines: the records of the real particles the window in hand needs (see
     /// [`Records`]).
@@ -743,6 +745,7 @@ fn compute_rates_on<const D: usize, K: Kernel>(
     let span = needs.iter().map(|r| r.len()).max().unwrap_or(0);
     let Rates {
         particles,
+        contact_force,
         gather,
         tail,
         art,
@@ -768,6 +771,9 @@ fn compute_rates_on<const D: usize, K: Kernel>(
     tail.resize(all + 1 - split, Gather::padding());
     build_records(p, ratio, split..all + 1, tail);
     particles.resize(n, ParticleRates::default());
+    if contact_force.len() < n {
+        contact_force.resize(n, Vector::zeros());
+    }
     if !any_failed {
         *cracks = CrackLists::default();
     }
@@ -807,17 +813,18 @@ fn compute_rates_on<const D: usize, K: Kernel>(
         // portable.
         macro_rules! run {
             ($art:literal, $cn:literal) => {
-                particles[evaluated]
+                particles[evaluated.clone()]
                     .par_iter_mut()
+                    .zip(&mut contact_force[evaluated.clone()])
                     .enumerate()
-                    .for_each(|(k, o)| {
+                    .for_each(|(k, (o, f))| {
                         // The thread's own copy of the pass's slices, read at every
                         // neighbour: the shared one sits in the calling thread's stack, whose
                         // lines that thread keeps writing (false sharing cost the 2-thread
                         // cubes 20 % in some builds).
                         let pass = pass;
                         let i = start + k;
-                        *o = nl.with_list(i, |list| {
+                        (*o, *f) = nl.with_list(i, |list| {
                             #[cfg(target_arch = "x86_64")]
                             if wide {
                                 // SAFETY: the CPU has AVX2 (asserted above).
@@ -861,7 +868,7 @@ fn particle_rates_avx2<const D: usize, K: Kernel, const ART: bool, const CN: boo
     i: usize,
     neighbors: &[u32],
     pass: &Pass<D>,
-) -> ParticleRates<D> {
+) -> (ParticleRates<D>, Vector<D>) {
     particle_rates::<D, K, ART, CN>(kernel, i, neighbors, pass)
 }
 
@@ -913,7 +920,7 @@ fn particle_rates<const D: usize, K: Kernel, const ART: bool, const CN: bool>(
     i: usize,
     neighbors: &[u32],
     pass: &Pass<D>,
-) -> ParticleRates<D> {
+) -> (ParticleRates<D>, Vector<D>) {
     let Pass {
         gather,
         colour,
@@ -1209,18 +1216,18 @@ fn particle_rates<const D: usize, K: Kernel, const ART: bool, const CN: bool>(
     } else {
         (lane_sum(&sums.drho) + cuts.drho, grad_v)
     };
-    ParticleRates {
+    let rates = ParticleRates {
         acc: acc + fc / mi + model.gravity,
         drho,
         de: lane_sum(&sums.de) + de_contact + cuts.de,
         de_lag: lane_sum(&sums.de_lag) + de_lag_contact + cuts.de_lag,
         grad_v,
-        contact_force: fc,
         contact_energy: phi,
         dt,
         min_interbody_gap: gap,
         neighbors: count,
-    }
+    };
+    (rates, fc)
 }
 
 /// The conservation terms of particle i with `LANES` neighbours `js`, one per lane, added to
@@ -2320,7 +2327,7 @@ mod tests {
         };
         pass(&[], &mut wide, true);
         pass(&[], &mut portable, false);
-        assert!(wide.particles.iter().any(|r| r.contact_force.norm() > 0.0));
+        assert!(wide.contact_force.iter().any(|f| f.norm() > 0.0));
         assert!(wide.cracks.wide && !portable.cracks.wide && !wide.cracks.items.is_empty());
         assert!(wide
             .particles
@@ -2329,6 +2336,7 @@ mod tests {
         for (i, (a, b)) in wide.particles.iter().zip(&portable.particles).enumerate() {
             assert_eq!(a, b, "particle {i}");
         }
+        assert_eq!(wide.contact_force, portable.contact_force);
         // CN-SPH: the correction pass, then the rates with B.
         let bodies = p.body.clone();
         let joined = |i: usize, j: usize| {
@@ -2352,6 +2360,7 @@ mod tests {
         for (i, (a, b)) in wide.particles.iter().zip(&portable.particles).enumerate() {
             assert_eq!(a, b, "CN-SPH, particle {i}");
         }
+        assert_eq!(wide.contact_force, portable.contact_force);
         // The supports the correction pass marks (once the lists are classified by body) give
         // the filter's rates to the bit, with failed particles among them.
         for i in (0..p.n_real).step_by(7) {
@@ -2374,6 +2383,7 @@ mod tests {
             for (i, (a, b)) in filtered.particles.iter().zip(&with.particles).enumerate() {
                 assert_eq!(a, b, "CN-SPH, marked supports, particle {i} (wide: {wide})");
             }
+            assert_eq!(filtered.contact_force, with.contact_force);
         }
     }
 
@@ -2463,9 +2473,13 @@ mod tests {
             assert!(whole.particles[owned.clone()]
                 .iter()
                 .all(|r| r.acc.norm() > 0.0));
-            assert!(whole.particles.iter().any(|r| r.contact_force.norm() > 0.0));
+            assert!(whole.contact_force.iter().any(|f| f.norm() > 0.0));
             for i in owned.clone() {
                 assert_eq!(whole.particles[i], paged.particles[i], "particle {i}");
+                assert_eq!(
+                    whole.contact_force[i], paged.contact_force[i],
+                    "particle {i}"
+                );
             }
         }
     }

@@ -357,7 +357,7 @@ law = "{law}"
         crate::physics::corrections(CubicSpline, &p, &nl, &model, &(0..p.n_real), &mut c);
     }
     let rates = rates_of(&p, &nl, &model, &c);
-    let f = rates.particles.iter().map(|r| r.contact_force).collect();
+    let f = rates.contact_force[..p.n_real].to_vec();
     Ok((p, f))
 }
 
