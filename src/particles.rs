@@ -264,35 +264,19 @@ pub fn from3<const D: usize>(a: [f64; 3]) -> Vector<D> {
 }
 
 /// Estimated memory per particle in bytes, used by `strike check` and the deck's memory check:
-/// what `strike bench` measured (peak resident memory over the steps, set-up included, per
-/// particle; 2026-11-24) plus about 4 % for ghosts and the allocator. In 3D: the state
-/// (≈ 390 B), the neighbour list with its skin (≈ 70 × 4 B), the rate pass's neighbour records
-/// and results (2 × 176 B) and the search buffers (≈ 110 B): 1151 B at 10⁶ particles and 1154 B
-/// at 10⁷; CN-SPH adds B, (σ/ρ²)B and the correction pass's records, 1511 B at 10⁶ (since
-/// 2026-11-25 about 30 B less: the rate pass reads B from the correction's array instead of a
-/// copy; a CN-SPH cube of 10⁶ particles, 3 steps of `strike run`, peaked at 1.45 GB of resident
-/// memory against 1.48 GB before). In 2D 771 B and 963 B (CN-SPH) at 5·10⁵. Since 2026-11-28
-/// a particle also keeps its strain rate and its mid-step velocity in single precision (48 B
-/// in 3D, 24 B in 2D) and the neighbour record grew by 24 B: 1223 B measured at 10⁶ in 3D;
-/// the other three add the same fields' sizes to their measurements. Since 2026-11-29 S, b and
-/// D keep one triangle ([`Sym`]) and u is single precision: 72 B less in 3D (1151 B measured
-/// at 10⁶), 8 B in 2D. Since 2026-11-29, later, the search keeps its copies of the positions
-/// and smoothing lengths in single precision and no copy of h (`neighbors`): 1121 B measured
-/// at 10⁶ in 3D (1182 B at the peak of 52 steps of `strike run`), 1457 B in CN-SPH, 737 B and
-/// 942 B in 2D (3 steps of `strike run`), the 2D estimates lowered to stay within 10 %. Since
-/// 2026-11-30 the rate pass holds the neighbour records of a window of particles at a time
-/// (`physics`), not of all: 947 B measured at 10⁶ in 3D (the peak of 3 steps of `strike run`
-/// 1131 → 957 MB), 1284 B in CN-SPH (1433 before), 586 B and 769 B in 2D at 5·10⁵ (739 and
-/// 946 before). Since 2026-11-30, later, the neighbour lists are packed (16-bit offsets,
-/// `neighbors`): 796 B measured by `strike bench` at 10⁶ in 3D (the peak of 3 steps of
-/// `strike run` 957 → 807 MB; two cubes in contact, 1.02·10⁶ particles, 1029 → 879 B, the
-/// colour states adding 72 B), 1133 B in CN-SPH (1284 before), 551 B and 733 B in 2D at 5·10⁵
-/// (587 and 768 before).
+/// what `strike bench` measures (peak resident memory over the steps, set-up included, per
+/// particle) plus about 5 % for ghosts and the allocator. In 3D (2026-11-30, a cube of 10⁶
+/// particles): 773 B, of which the state is about 360 B, the packed neighbour lists with their
+/// skin about 165 (`neighbors`), the rate pass's results 152 and its window of neighbour
+/// records about 25 (`physics`), and the search's buffers about 60; the peak of 3 steps of
+/// `strike run` is 783 MB. Contact adds the colour states, 64 B (two cubes in contact,
+/// 1.02·10⁶ particles: 847 B). CN-SPH adds B, (σ/ρ²)B and the correction pass's records:
+/// 1110 B. In 2D at 5·10⁵ particles: 537 B, and 744 B in CN-SPH (3 steps of `strike run`).
 pub fn estimated_bytes_per_particle(dimension: usize, corrected: bool) -> usize {
     match (dimension, corrected) {
-        (2, false) => 580,
-        (2, true) => 770,
-        (_, false) => 840,
-        (_, true) => 1190,
+        (2, false) => 565,
+        (2, true) => 775,
+        (_, false) => 810,
+        (_, true) => 1160,
     }
 }

@@ -817,23 +817,30 @@ fn compute_rates_on<const D: usize, K: Kernel>(
                     .par_iter_mut()
                     .zip(&mut contact_force[evaluated.clone()])
                     .enumerate()
-                    .for_each(|(k, (o, f))| {
+                    .for_each_init(Vec::new, |list, (k, (o, f))| {
                         // The thread's own copy of the pass's slices, read at every
                         // neighbour: the shared one sits in the calling thread's stack, whose
                         // lines that thread keeps writing (false sharing cost the 2-thread
                         // cubes 20 % in some builds).
                         let pass = pass;
                         let i = start + k;
-                        (*o, *f) = nl.with_list(i, |list| {
-                            #[cfg(target_arch = "x86_64")]
-                            if wide {
-                                // SAFETY: the CPU has AVX2 (asserted above).
-                                return unsafe {
-                                    particle_rates_avx2::<D, K, $art, $cn>(kernel, i, list, &pass)
-                                };
-                            }
-                            particle_rates::<D, K, $art, $cn>(kernel, i, list, &pass)
-                        });
+                        // The list unpacked into the job's own buffer.
+                        nl.list(i).unpack_into(list);
+                        #[cfg(target_arch = "x86_64")]
+                        if wide {
+                            // SAFETY: the CPU has AVX2 (asserted above).
+                            unsafe {
+                                particle_rates_avx2::<D, K, $art, $cn>(
+                                    kernel,
+                                    i,
+                                    list,
+                                    &pass,
+                                    (o, f),
+                                )
+                            };
+                            return;
+                        }
+                        particle_rates::<D, K, $art, $cn>(kernel, i, list, &pass, (o, f))
                     })
             };
         }
@@ -868,8 +875,9 @@ fn particle_rates_avx2<const D: usize, K: Kernel, const ART: bool, const CN: boo
     i: usize,
     neighbors: &[u32],
     pass: &Pass<D>,
-) -> (ParticleRates<D>, Vector<D>) {
-    particle_rates::<D, K, ART, CN>(kernel, i, neighbors, pass)
+    out: (&mut ParticleRates<D>, &mut Vector<D>),
+) {
+    particle_rates::<D, K, ART, CN>(kernel, i, neighbors, pass, out)
 }
 
 /// The conservation sums of one particle, one accumulator per lane (added up in lane order at
@@ -920,7 +928,8 @@ fn particle_rates<const D: usize, K: Kernel, const ART: bool, const CN: bool>(
     i: usize,
     neighbors: &[u32],
     pass: &Pass<D>,
-) -> (ParticleRates<D>, Vector<D>) {
+    (out, contact_force): (&mut ParticleRates<D>, &mut Vector<D>),
+) {
     let Pass {
         gather,
         colour,
@@ -1216,7 +1225,8 @@ fn particle_rates<const D: usize, K: Kernel, const ART: bool, const CN: bool>(
     } else {
         (lane_sum(&sums.drho) + cuts.drho, grad_v)
     };
-    let rates = ParticleRates {
+    *contact_force = fc;
+    *out = ParticleRates {
         acc: acc + fc / mi + model.gravity,
         drho,
         de: lane_sum(&sums.de) + de_contact + cuts.de,
@@ -1227,7 +1237,6 @@ fn particle_rates<const D: usize, K: Kernel, const ART: bool, const CN: bool>(
         min_interbody_gap: gap,
         neighbors: count,
     };
-    (rates, fc)
 }
 
 /// The conservation terms of particle i with `LANES` neighbours `js`, one per lane, added to
