@@ -245,7 +245,7 @@ fn steel_cubes(name: &str, material: &str) -> String {
 }
 
 /// Edge of the large cube in particles: 216³ = 10 077 696, the ten million particles of issue
-/// 14 (about 10 GB).
+/// 14 (7.7 GB).
 pub const LARGE_CUBE: usize = 216;
 
 /// The standard benchmark. First the large cube (10⁷ particles, 2 steps; skipped with a warning
