@@ -271,11 +271,6 @@ impl<const D: usize> Grid<D> {
 }
 
 impl NeighborList {
-    /// Total number of (i, j) entries.
-    pub fn total(&self) -> usize {
-        (0..self.n_lists).map(|i| self.list(i).count()).sum()
-    }
-
     /// Number of lists (the real particles of the last build).
     pub fn len(&self) -> usize {
         self.n_lists
