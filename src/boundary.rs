@@ -100,7 +100,7 @@ impl Ghosts {
         &self,
         values: &mut Vec<T>,
         planes: &[Plane],
-        mirror: impl Fn(T, usize) -> T,
+        mut mirror: impl FnMut(T, usize) -> T,
     ) {
         for (plane, w) in planes.iter().zip(self.first.windows(2)) {
             for &s in &self.sources[w[0]..w[1]] {

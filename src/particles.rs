@@ -269,8 +269,9 @@ pub fn from3<const D: usize>(a: [f64; 3]) -> Vector<D> {
 /// particles): 773 B, of which the state is about 360 B, the packed neighbour lists with their
 /// skin about 165 (`neighbors`), the rate pass's results 152 and its window of neighbour
 /// records about 25 (`physics`), and the search's buffers about 60; the peak of 3 steps of
-/// `strike run` is 783 MB. Contact adds the colour states, 64 B (two cubes in contact,
-/// 1.02·10⁶ particles: 847 B). CN-SPH adds B, (σ/ρ²)B and the correction pass's records:
+/// `strike run` is 783 MB. Contact adds the colour states' slots (4 B; the states themselves
+/// only for the particles near another body) and the search radii max(h, h0) (8 B): two cubes
+/// in contact, 1.02·10⁶ particles, 790 B. CN-SPH adds B, (σ/ρ²)B and the correction pass's records:
 /// 1110 B. In 2D at 5·10⁵ particles: 537 B, and 744 B in CN-SPH (3 steps of `strike run`).
 pub fn estimated_bytes_per_particle(dimension: usize, corrected: bool) -> usize {
     match (dimension, corrected) {

@@ -4,7 +4,7 @@
 use crate::boundary;
 use crate::boundary::Plane;
 use crate::case::{Case, Formulation, KernelKind};
-use crate::contact::colour::{self, ColourState};
+use crate::contact::colour::{self, ColourStates};
 use crate::error::{Error, Result};
 use crate::integrate;
 use crate::kernel::{CubicSpline, WendlandC2};
@@ -76,7 +76,7 @@ pub struct Simulation<const D: usize> {
     sums_new: Vec<Sums>,
     body_force_blocks: Vec<[f64; 3]>,
     /// The colour-law state of every particle, ghosts included (empty without such pairs).
-    colour: Vec<ColourState>,
+    colour: ColourStates,
     /// Search radii max(h, h0): the colour law reaches 2 h0 also where h has shrunk.
     h_search: Vec<f64>,
     /// CN-SPH: each particle's correction, and B of every particle, ghosts included.
@@ -286,7 +286,7 @@ impl<const D: usize> Simulation<D> {
             sums_old: Vec::new(),
             sums_new: Vec::new(),
             body_force_blocks: Vec::new(),
-            colour: Vec::new(),
+            colour: ColourStates::default(),
             h_search: Vec::new(),
             corrections: Vec::new(),
             corr: Vec::new(),
@@ -530,20 +530,16 @@ impl<const D: usize> Simulation<D> {
             }
             self.busy += lap.elapsed().as_secs_f64();
             lap = Instant::now();
-            ranks.share(&mut self.colour, parts);
+            self.colour.share(ranks, parts);
             self.exchanging += lap.elapsed().as_secs_f64();
             lap = Instant::now();
             // A ghost's state is its source's, with the normal mirrored.
-            self.ghosts
-                .extend_to_ghosts_with(&mut self.colour, &self.symmetry, |mut s, axis| {
-                    s.normal[axis] = -s.normal[axis];
-                    s
-                });
+            self.colour.extend_to_ghosts(&self.ghosts, &self.symmetry);
         }
         let (nl, model) = (&self.neighbors, &self.model);
         // The corrections (and their supports) only where this step computed them.
         let marks = if cn { &self.corrections[..] } else { &[][..] };
-        let fields = (&self.colour[..], &self.corr[..], marks);
+        let fields = (&self.colour, &self.corr[..], marks);
         // The pass writes the contact forces into the particles' own array, lent to it.
         std::mem::swap(&mut self.rates.contact_force, &mut p.contact_force);
         match self.kernel {

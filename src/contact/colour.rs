@@ -50,6 +50,7 @@ use crate::material::Material;
 use crate::neighbors::NeighborList;
 use crate::particles::{Particles, Tensor};
 use crate::physics::correction::{self, plane_normal, LAMBDA_SURFACE};
+use rayon::prelude::*;
 use std::ops::Range;
 
 /// The colour of a flat square (2D) or simple-cubic (3D) lattice of spacing Δp seen by a
@@ -227,7 +228,8 @@ pub struct Surfaces<'a, const D: usize> {
 }
 
 /// The colour state of the real particles in `owned` (`out[i]`; `out` holds one for every real
-/// particle), from its neighbours within the support.
+/// particle, the default for those outside `owned` until [`ColourStates::share`]), from its
+/// neighbours within the support.
 ///
 /// The outward normal is −Σ_k V0_k ∇_i W_ik over its own body in conventional SPH. With
 /// CN-SPH's `surfaces`, where the body's boundary is its boundary particles, it is the normal of
@@ -249,9 +251,9 @@ pub fn states<const D: usize, K: Kernel>(
     meeting: &impl Meeting,
     (law, surfaces): (Option<&ColourLaw>, Option<Surfaces<D>>),
     owned: &Range<usize>,
-    out: &mut Vec<ColourState>,
+    out: &mut ColourStates,
 ) {
-    crate::ranks::fill(out, p.n_real, owned, |i| {
+    let state = |i: usize| {
         let bi = p.body[i];
         // Most particles have no neighbour of another body (see `NeighborList::classify`).
         if !nl.mixed.get(i).copied().unwrap_or(true) {
@@ -365,7 +367,117 @@ pub fn states<const D: usize, K: Kernel>(
             s.strain = eps.max(0.0);
         }
         s
-    });
+    };
+    // Only the particles near another body have a state other than the default: kept in
+    // particle order, whatever the thread count.
+    let found: Vec<(u32, ColourState)> = owned
+        .clone()
+        .into_par_iter()
+        .filter_map(|i| {
+            let s = state(i);
+            (s != ColourState::default()).then_some((i as u32, s))
+        })
+        .collect();
+    out.slot.clear();
+    out.slot.resize(p.n_real, 0);
+    out.states.clear();
+    out.states.push(ColourState::default());
+    for (i, s) in found {
+        out.slot[i as usize] = out.states.len() as u32;
+        out.states.push(s);
+    }
+}
+
+/// The colour states of all particles, ghosts included, kept only for the particles that have
+/// one other than the default (those near another body): `slot[i]` indexes `states`, whose
+/// first entry is the default state that every other particle reads. Kept for every particle, a
+/// state took 64 bytes of each in 3D, the largest share of a contact run's memory after the
+/// particles' own state and their lists; few particles are near another body.
+#[derive(Debug, Clone, Default)]
+pub struct ColourStates {
+    slot: Vec<u32>,
+    states: Vec<ColourState>,
+}
+
+impl std::ops::Index<usize> for ColourStates {
+    type Output = ColourState;
+
+    #[inline]
+    fn index(&self, i: usize) -> &ColourState {
+        &self.states[self.slot[i] as usize]
+    }
+}
+
+impl ColourStates {
+    /// Whether there are none (no pair of bodies uses the colour states).
+    pub fn is_empty(&self) -> bool {
+        self.slot.is_empty()
+    }
+
+    /// Particle i's state, if the states reach it.
+    #[inline]
+    pub fn get(&self, i: usize) -> Option<&ColourState> {
+        self.slot.get(i).map(|&k| &self.states[k as usize])
+    }
+
+    /// No states (no pair of bodies uses them).
+    pub fn clear(&mut self) {
+        self.slot.clear();
+        self.states.clear();
+    }
+
+    /// The states other than the default, in particle order.
+    pub fn kept(&self) -> &[ColourState] {
+        self.states.get(1..).unwrap_or(&[])
+    }
+
+    /// After each rank has found the states of its own range `parts[rank]` of the real
+    /// particles, give every rank all of them: each rank's states go after those of the ranks
+    /// before it (the same order as one rank's), and its particles' slots move with them.
+    pub fn share(&mut self, ranks: crate::ranks::Ranks, parts: &[Range<usize>]) {
+        if ranks.size() == 1 {
+            return;
+        }
+        let mine = self.states.len() - 1;
+        let counts = ranks.gather_each(mine as f64);
+        let mut ranges = Vec::with_capacity(counts.len());
+        let mut start = 1;
+        for &c in &counts {
+            let c = c as usize;
+            ranges.push(start..start + c);
+            start += c;
+        }
+        let own = ranges[ranks.rank()].clone();
+        let found = std::mem::take(&mut self.states);
+        self.states = vec![ColourState::default(); start];
+        self.states[own.clone()].copy_from_slice(&found[1..]);
+        for k in &mut self.slot[parts[ranks.rank()].clone()] {
+            if *k != 0 {
+                *k += own.start as u32 - 1;
+            }
+        }
+        ranks.share(&mut self.states, &ranges);
+        ranks.share(&mut self.slot, parts);
+    }
+
+    /// Extend the states to the ghosts, in ghost order: each ghost gets its source's state with
+    /// the normal's component along its plane's axis reversed.
+    pub fn extend_to_ghosts(
+        &mut self,
+        ghosts: &crate::boundary::Ghosts,
+        planes: &[crate::boundary::Plane],
+    ) {
+        let states = &mut self.states;
+        ghosts.extend_to_ghosts_with(&mut self.slot, planes, |k, axis| {
+            if k == 0 {
+                return 0;
+            }
+            let mut s = states[k as usize];
+            s.normal[axis] = -s.normal[axis];
+            states.push(s);
+            (states.len() - 1) as u32
+        });
+    }
 }
 
 /// The contact normal of a pair (i of body A, j of body B), pointing from A into B: the

@@ -55,7 +55,7 @@ pub mod correction;
 pub mod viscosity;
 
 use crate::case::Formulation;
-use crate::contact::colour::{self, ColourLaw, ColourState};
+use crate::contact::colour::{self, ColourLaw, ColourStates};
 use crate::contact::{self, ContactLaw, ContactParams};
 use crate::kernel::Kernel;
 use crate::material::Material;
@@ -185,7 +185,7 @@ pub fn colour_states<const D: usize, K: Kernel>(
     nl: &NeighborList,
     model: &Model<D>,
     (surfaces, owned): (Option<colour::Surfaces<D>>, &Range<usize>),
-    out: &mut Vec<ColourState>,
+    out: &mut ColourStates,
 ) {
     if needs_colour_states(model) {
         let law = model.colour.as_ref();
@@ -472,7 +472,7 @@ struct Pass<'a, const D: usize> {
     /// Whether any particle is fully damaged (pairs with one, or severed by one
     /// ([`CrackLists::severs`]), need [`tension_cut`]).
     any_failed: bool,
-    colour: &'a [ColourState],
+    colour: &'a ColourStates,
     /// Pressures (ghosts included): what a pair with a failed member passes on.
     pressure: &'a [f64],
     model: &'a Model<D>,
@@ -646,7 +646,7 @@ pub fn compute_rates<const D: usize, K: Kernel>(
 /// particles from the correction pass of the same step, for their [`correction::Support`] (may be empty:
 /// the pass then tests the whole list).
 pub type PassFields<'a, const D: usize> = (
-    &'a [ColourState],
+    &'a ColourStates,
     &'a [Tensor<D>],
     &'a [correction::Correction<D>],
 );
@@ -2047,7 +2047,7 @@ mod tests {
             p,
             nl,
             model,
-            (&[], b, &[]),
+            (&ColourStates::default(), b, &[]),
             &(0..p.n_real),
             &mut out,
         );
@@ -2313,11 +2313,11 @@ mod tests {
         let mut nl = NeighborList::default();
         nl.build(&p.x, &p.h, p.n_real, 0.1 * p.h[0]);
         let (mut wide, mut portable) = (Rates::default(), Rates::default());
-        let mut states = Vec::new();
+        let mut states = ColourStates::default();
         let all = 0..p.n_real;
         colour_states(CubicSpline, &p, &nl, &model, (None, &all), &mut states);
         assert!(
-            states.iter().any(|s| s.coef > 0.0),
+            states.kept().iter().any(|s| s.coef > 0.0),
             "the colour law is at work"
         );
         // The pass on AVX2 (`wide`) or portable, with CN-SPH's B (`b`, empty: conventional).
@@ -2384,7 +2384,7 @@ mod tests {
         for wide in [true, false] {
             let (mut filtered, mut with) = (Rates::default(), Rates::default());
             for (marks, out) in [(&[][..], &mut filtered), (&marked[..], &mut with)] {
-                let fields = (&states[..], &b[..], marks);
+                let fields = (&states, &b[..], marks);
                 let w = WINDOW_PAGES;
                 compute_rates_on(CubicSpline, &p, &nl, &model, fields, &all, out, wide, w);
             }
@@ -2434,17 +2434,14 @@ mod tests {
         assert!(p.len() > p.n_real && p.n_real > 12 * PAGE);
         nl.build(&p.x, &p.h, p.n_real, 0.1 * p.h[0]);
         // Colour states and B of the real particles, their ghosts' mirrored (as `simulation`).
-        let mut states = Vec::new();
+        let mut states = ColourStates::default();
         let all = 0..p.n_real;
         colour_states(CubicSpline, &p, &nl, &model, (None, &all), &mut states);
         assert!(
-            states.iter().any(|s| s.coef > 0.0),
+            states.kept().iter().any(|s| s.coef > 0.0),
             "the colour law is at work"
         );
-        ghosts.extend_to_ghosts_with(&mut states, &plane, |mut s, axis| {
-            s.normal[axis] = -s.normal[axis];
-            s
-        });
+        states.extend_to_ghosts(&ghosts, &plane);
         let mut c = Vec::new();
         corrections(CubicSpline, &p, &nl, &model, &all, &mut c);
         let mut b: Vec<Tensor<3>> = c.iter().map(|c| c.b).collect();
@@ -2461,7 +2458,7 @@ mod tests {
         for (b, owned) in [(&[][..], &all), (&b[..], &all), (&[][..], &share)] {
             let (mut whole, mut paged) = (Rates::default(), Rates::default());
             for (out, window) in [(&mut whole, usize::MAX), (&mut paged, 1)] {
-                let fields = (&states[..], b, &[][..]);
+                let fields = (&states, b, &[][..]);
                 compute_rates_on(
                     CubicSpline,
                     &p,

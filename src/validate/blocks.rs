@@ -458,7 +458,7 @@ fn rates_of(
     let b: Vec<Tensor<3>> = c.iter().map(|c| c.b).collect();
     let lambda: Vec<f64> = c.iter().map(|c| c.lambda_min).collect();
     let surfaces = (!c.is_empty()).then_some(colour::Surfaces { lambda: &lambda });
-    let mut states = Vec::new();
+    let mut states = colour::ColourStates::default();
     colour_states(CubicSpline, p, nl, model, (surfaces, &all), &mut states);
     let mut rates = Rates::default();
     compute_rates(
