@@ -1090,10 +1090,12 @@ fn particle_rates<const D: usize, K: Kernel, const ART: bool, const CN: bool>(
                             gi.m / model.material_of(bi).rho0,
                             gj.m / model.material_of(gj.body).rho0,
                         );
+                        // The pair's states, found once (each a slot and an entry).
+                        let (si, sj) = (&colour[i], &colour[j as usize]);
                         let (f, k) = colour::pair::<D, K>(
                             kernel,
-                            &colour[i],
-                            &colour[j as usize],
+                            si,
+                            sj,
                             &xij,
                             r,
                             vol0,
@@ -1102,7 +1104,7 @@ fn particle_rates<const D: usize, K: Kernel, const ART: bool, const CN: bool>(
                             if CN {
                                 0.0
                             } else {
-                                colour::tangential_share(&colour[i], &colour[j as usize])
+                                colour::tangential_share(si, sj)
                             },
                         );
                         for a in 0..D {
@@ -1141,8 +1143,8 @@ fn particle_rates<const D: usize, K: Kernel, const ART: bool, const CN: bool>(
                         }
                         let (t, mu) = colour::damping::<D, K>(
                             kernel,
-                            &colour[i],
-                            &colour[j as usize],
+                            si,
+                            sj,
                             &xij,
                             r,
                             h0,
