@@ -921,7 +921,9 @@ fn lane_max(a: &[f64; LANES]) -> f64 {
 /// A first loop sorts the neighbour list: those beyond the support are dropped, those in
 /// contact get eq. (5) at once (few: only at interfaces), and the rest are queued, without a
 /// branch, for the conservation equations, which [`conserve_chunk`] evaluates `LANES` at a
-/// time. The last chunk is filled up with the padding record.
+/// time. The last chunk is filled up with the padding record. The rates are written into `out`,
+/// the contact force into `contact_force` (the particle's entry of the array the simulation
+/// lends the pass, see [`Rates::contact_force`]).
 #[inline(always)]
 fn particle_rates<const D: usize, K: Kernel, const ART: bool, const CN: bool>(
     kernel: K,
