@@ -409,11 +409,6 @@ impl std::ops::Index<usize> for ColourStates {
 }
 
 impl ColourStates {
-    /// Whether there are none (no pair of bodies uses the colour states).
-    pub fn is_empty(&self) -> bool {
-        self.slot.is_empty()
-    }
-
     /// Particle i's state, if the states reach it.
     #[inline]
     pub fn get(&self, i: usize) -> Option<&ColourState> {
