@@ -192,6 +192,17 @@ impl<'a> Listed<'a> {
         Some(((u32::from(hi) << 16) | u32::from(lo), offsets))
     }
 
+    /// The list's segments, each its first index and the offsets of its entries from it:
+    /// for the scans that test every entry against an array indexed by particle, which can
+    /// then skip a segment whose index range holds nothing to find.
+    #[inline]
+    pub fn segments(mut self) -> impl Iterator<Item = (u32, &'a [u16])> {
+        let first = (!self.left.is_empty()).then_some((self.base, self.left));
+        first
+            .into_iter()
+            .chain(std::iter::from_fn(move || Self::segment(&mut self.words)))
+    }
+
     /// The whole list appended to `out` (cleared first) as plain indices.
     #[inline]
     pub fn unpack_into(mut self, out: &mut Vec<u32>) {
@@ -868,6 +879,11 @@ mod tests {
             let mut out = vec![7];
             Listed::new(&words).unpack_into(&mut out);
             proptest::prop_assert_eq!(&out, &list);
+            let by_segment: Vec<u32> = Listed::new(&words)
+                .segments()
+                .flat_map(|(base, offsets)| offsets.iter().map(move |&o| base + u32::from(o)))
+                .collect();
+            proptest::prop_assert_eq!(&by_segment, &list);
         }
     }
 
