@@ -1667,7 +1667,10 @@ pub fn crater_run(case: &Case) -> Result<CraterRun> {
 /// (ASM handbook values as NASA's BLE tool pyBLOSSUM tabulates them): 1.66 mm for d = 1 mm.
 /// The equation is an empirical fit without a published scatter band in the sources at hand, so
 /// the depth is reported against it, not held; held are that refinement does not move the depth
-/// away from it, no mixing and momentum. Coarse: d/Δp = 6 and 8 (about 7 minutes on 2 cores);
+/// away from it, no mixing and momentum. Reported beside the depth: the depth over the crater's
+/// diameter at the surface, against the 0.56–0.60 of LDEF's aluminium craters (Love, Brownlee,
+/// King & Hörz 1993, LPSC 24, 809: normal impacts above 5 km/s, the ratio independent of size,
+/// speed and hardness). Coarse: d/Δp = 6 and 8 (about 7 minutes on 2 cores);
 /// `fine`: 8 and 10 (about 18). Measured on 2026-11-29: 1.94 / 2.29 / 2.25 mm at d/Δp = 6 /
 /// 8 / 10, +9.6 / +36.1 / +33.5 %: the coarse pair fails its convergence check (README, Not
 /// yet).
