@@ -239,6 +239,48 @@ fn cour_palais_crater_depth_by_hand() {
     assert!((p2 / p - 2.0 * 2.0_f64.powf(19.0 / 18.0)).abs() < 1e-12);
 }
 
+/// The crater's measure (`validate::contact::crater_shape`) sees a bowl of known size: a
+/// quarter lattice (Δp = 0.05 mm) below z = 0 with a hemisphere of radius R about the origin
+/// taken out reads depth R and diameter 2R within a spacing, for two radii, with a few loose
+/// particles lying in the bowl (which must not count as its floor or its wall). The floor is
+/// looked for within R/4 of the axis, about the ratio of the crater case's (0.4 d against a
+/// crater some 3.5 d across), where the bowl's own curvature lifts it by 0.03 R.
+#[test]
+fn crater_measure_reads_a_known_bowl() {
+    let dp = 5e-5;
+    for radius in [0.8e-3, 1.2e-3] {
+        let centre = |k: usize| (k as f64 + 0.5) * dp;
+        let mut block = Vec::new();
+        for i in 0..40 {
+            for j in 0..40 {
+                for k in 0..30 {
+                    let x = [centre(i), centre(j), -centre(k)];
+                    if x.iter().map(|c| c * c).sum::<f64>().sqrt() > radius {
+                        block.push(x);
+                    }
+                }
+            }
+        }
+        // Loose debris: a few particles on the axis and along the bowl's rim, inside it.
+        for f in [0.3, 0.6, 0.9] {
+            block.push([0.5 * dp, 0.5 * dp, -f * radius]);
+            block.push([0.7 * radius, 0.5 * dp, -0.5 * dp]);
+        }
+        let (depth, diameter) =
+            strike::validate::contact::crater_shape(&block, (dp, 0.0, 4.0), 0.25 * radius).unwrap();
+        eprintln!("R = {radius}: depth {depth}, diameter {diameter}");
+        // Within a spacing, to the rounding of the lattice's centres.
+        assert!(
+            (depth - radius).abs() < 1.01 * dp,
+            "R = {radius}: depth {depth}"
+        );
+        assert!(
+            (diameter - 2.0 * radius).abs() < 1.01 * dp,
+            "R = {radius}: diameter {diameter}"
+        );
+    }
+}
+
 /// Rubble keeps its energy and its density. A cube of failed aluminium (every particle at
 /// damage 1: it pushes but cannot pull) with random velocities of ±20 m/s and no mean motion:
 /// its particles knock into each other and drift apart. Energy must stay within 0.5 % and no

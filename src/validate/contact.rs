@@ -1615,10 +1615,34 @@ pub fn crater_run(case: &Case) -> Result<CraterRun> {
         + 0.5 * dp;
     let rows = record(&mut sim, case.simulation.end_time, |_| {})?;
     let p = &sim.particles;
-    let reach = 0.4 * d_eq;
-    let mut column: Vec<f64> = (0..p.n_real)
-        .filter(|&i| p.body[i] == 1 && p.x[i][0].hypot(p.x[i][1]) < reach)
-        .map(|i| p.x[i][2])
+    let block: Vec<[f64; 3]> = (0..p.n_real)
+        .filter(|&i| p.body[i] == 1)
+        .map(|i| [p.x[i][0], p.x[i][1], p.x[i][2]])
+        .collect();
+    let (depth, diameter) = crater_shape(&block, (dp, surface, mirrors), 0.4 * d_eq)?;
+    Ok(CraterRun {
+        depth,
+        diameter,
+        d_eq,
+        rows,
+    })
+}
+
+/// The crater's depth on the axis and its diameter at the original surface (m), as
+/// [`crater_run`] reads them from the block's particle centres `block`, on a lattice of
+/// spacing `dp` whose original surface is at z = `surface`, in the part of the whole that
+/// `mirrors` symmetry images complete (4 for a quarter model), the floor looked for within
+/// `reach` of the axis.
+pub fn crater_shape(
+    block: &[[f64; 3]],
+    (dp, surface, mirrors): (f64, f64, f64),
+    reach: f64,
+) -> Result<(f64, f64)> {
+    let radius = |x: &[f64; 3]| x[0].hypot(x[1]);
+    let mut column: Vec<f64> = block
+        .iter()
+        .filter(|x| radius(x) < reach)
+        .map(|x| x[2])
         .collect();
     column.sort_by(|a, b| b.total_cmp(a));
     let area = std::f64::consts::PI * reach * reach / mirrors;
@@ -1635,10 +1659,10 @@ pub fn crater_run(case: &Case) -> Result<CraterRun> {
         })
         .map(|(_, &z)| z)
         .ok_or_else(|| Error::Invalid("no crater floor on the axis".into()))?;
-    let mut ring: Vec<f64> = (0..p.n_real)
-        .filter(|&i| p.body[i] == 1)
-        .filter(|&i| (0.0..1.5 * dp).contains(&(surface - p.x[i][2])))
-        .map(|i| p.x[i][0].hypot(p.x[i][1]))
+    let mut ring: Vec<f64> = block
+        .iter()
+        .filter(|x| (0.0..1.5 * dp).contains(&(surface - x[2])))
+        .map(radius)
         .collect();
     ring.sort_by(f64::total_cmp);
     // How many quarters of the full annulus the symmetry planes leave (one for two planes).
@@ -1652,12 +1676,7 @@ pub fn crater_run(case: &Case) -> Result<CraterRun> {
         })
         .map(|(_, &r)| r)
         .ok_or_else(|| Error::Invalid("no crater wall at the surface".into()))?;
-    Ok(CraterRun {
-        depth: surface - (floor + 0.5 * dp),
-        diameter: 2.0 * (edge - 0.5 * dp),
-        d_eq,
-        rows,
-    })
+    Ok((surface - (floor + 0.5 * dp), 2.0 * (edge - 0.5 * dp)))
 }
 
 /// Hypervelocity cratering (issue 13, item 6; `examples/crater.toml`): a 1 mm Al 6061-T6 sphere
