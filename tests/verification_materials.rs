@@ -261,10 +261,16 @@ fn crater_measure_reads_a_known_bowl() {
                 }
             }
         }
-        // Loose debris: a few particles on the axis and along the bowl's rim, inside it.
-        for f in [0.3, 0.6, 0.9] {
+        // Loose debris inside the bowl: a few particles on the axis, and a few at 0.7 R in
+        // the surface layer, where the wall is looked for.
+        for f in [0.3_f64, 0.6, 0.9] {
             block.push([0.5 * dp, 0.5 * dp, -f * radius]);
-            block.push([0.7 * radius, 0.5 * dp, -0.5 * dp]);
+            let angle = f * std::f64::consts::FRAC_PI_2;
+            block.push([
+                0.7 * radius * angle.cos(),
+                0.7 * radius * angle.sin(),
+                -0.5 * dp,
+            ]);
         }
         let (depth, diameter) =
             strike::validate::contact::crater_shape(&block, (dp, 0.0, 4.0), 0.25 * radius).unwrap();
