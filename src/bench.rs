@@ -2,11 +2,14 @@
 //! thread and on all cores, reporting particle-steps/s, particle-neighbour interactions/s per
 //! core, mean neighbours and peak memory per particle. Also written to `bench.json`. Under
 //! `mpirun` (the `mpi` feature) each case runs on all the ranks with one thread each, and the
-//! share of the time spent in the exchanges between ranks is reported.
+//! share of the time spent in the exchanges between ranks is reported. After each case, the
+//! halo a domain decomposition would exchange a step (`ranks::Halo`): under MPI each rank's
+//! own; on one process for splits into 2 to 1000 ranks along the run's cell order and along
+//! Morton's curve (the evidence for the weak-scaling model in the README).
 
 use crate::deck;
 use crate::error::{Error, Result};
-use crate::ranks::Ranks;
+use crate::ranks::{Curve, Ranks};
 use crate::simulation::Simulation;
 use serde::Serialize;
 use std::time::Instant;
@@ -36,6 +39,45 @@ pub struct BenchCase {
     pub bytes_per_particle: f64,
     /// What `strike check` estimates per particle for the same deck, for comparison.
     pub estimated_bytes_per_particle: f64,
+    /// The halos a domain decomposition would exchange at the end of the timed steps: under
+    /// MPI the run's own ranks', on one process splits of its lists into several ranks.
+    pub halos: Vec<HaloFigure>,
+}
+
+/// The halos of one split into ranks (see [`crate::ranks::Halo`]).
+#[derive(Debug, Clone, Serialize)]
+pub struct HaloFigure {
+    pub ranks: usize,
+    /// The order the ranks' ranges are taken along.
+    pub curve: Curve,
+    /// Whether these are the ranks of the run itself (MPI), not a split of one process's
+    /// lists into ranges along `curve`, balanced as a run on that many ranks balances them.
+    pub actual: bool,
+    pub particles_per_rank: f64,
+    /// Halo particles over a rank's own: mean and largest over the ranks.
+    pub halo_share_mean: f64,
+    pub halo_share_max: f64,
+    /// Ranks a rank's halo comes from (its messages a step): mean and largest.
+    pub neighbour_ranks_mean: f64,
+    pub neighbour_ranks_max: usize,
+}
+
+impl HaloFigure {
+    fn of(halos: &[crate::ranks::Halo], curve: Curve, actual: bool) -> Option<HaloFigure> {
+        let r = halos.len();
+        let share = |h: &crate::ranks::Halo| h.halo as f64 / h.own.max(1) as f64;
+        (r > 0).then(|| HaloFigure {
+            ranks: r,
+            curve,
+            actual,
+            particles_per_rank: halos.iter().map(|h| h.own).sum::<usize>() as f64 / r as f64,
+            halo_share_mean: halos.iter().map(share).sum::<f64>() / r as f64,
+            halo_share_max: halos.iter().map(share).fold(0.0, f64::max),
+            neighbour_ranks_mean: halos.iter().map(|h| h.neighbour_ranks).sum::<usize>() as f64
+                / r as f64,
+            neighbour_ranks_max: halos.iter().map(|h| h.neighbour_ranks).max().unwrap_or(0),
+        })
+    }
 }
 
 #[derive(Debug, Clone, Serialize)]
@@ -131,13 +173,14 @@ fn reset_peak() {
 }
 
 /// Measure one deck at one thread count (of each of `ranks`): `warmup` steps, then `steps`
-/// timed steps.
+/// timed steps; then the halos of `census` ranks each (on one process; under MPI the run's
+/// own, whatever `census` holds, unless it is empty).
 pub fn measure(
     text: &str,
     label: &str,
     (threads, ranks): (usize, Ranks),
-    warmup: u64,
-    steps: u64,
+    (warmup, steps): (u64, u64),
+    census: &[usize],
 ) -> Result<BenchCase> {
     let case = deck::parse(text, label)?;
     let pool = rayon::ThreadPoolBuilder::new()
@@ -147,16 +190,16 @@ pub fn measure(
     reset_peak();
     let (_, base) = rss();
     pool.install(|| match case.dimension {
-        2 => measure_dim::<2>(&case, (threads, ranks), warmup, steps, base),
-        _ => measure_dim::<3>(&case, (threads, ranks), warmup, steps, base),
+        2 => measure_dim::<2>(&case, (threads, ranks), (warmup, steps), census, base),
+        _ => measure_dim::<3>(&case, (threads, ranks), (warmup, steps), census, base),
     })
 }
 
 fn measure_dim<const D: usize>(
     case: &crate::case::Case,
     (threads, ranks): (usize, Ranks),
-    warmup: u64,
-    steps: u64,
+    (warmup, steps): (u64, u64),
+    census: &[usize],
     base_rss: u64,
 ) -> Result<BenchCase> {
     let mut sim = Simulation::<D>::new(case)?;
@@ -173,6 +216,30 @@ fn measure_dim<const D: usize>(
     let wall = start.elapsed().as_secs_f64();
     let n = sim.particles.n_real;
     let (peak, _) = rss();
+    let halos = if census.is_empty() {
+        Vec::new()
+    } else if ranks.size() > 1 {
+        let own = sim.own_halo();
+        let each = |v: usize| ranks.gather_each(v as f64);
+        let (own_all, halo_all, from_all) =
+            (each(own.own), each(own.halo), each(own.neighbour_ranks));
+        let all: Vec<crate::ranks::Halo> = (0..ranks.size())
+            .map(|r| crate::ranks::Halo {
+                own: own_all[r] as usize,
+                halo: halo_all[r] as usize,
+                neighbour_ranks: from_all[r] as usize,
+            })
+            .collect();
+        HaloFigure::of(&all, Curve::Cells, true)
+            .into_iter()
+            .collect()
+    } else {
+        [Curve::Cells, Curve::Morton]
+            .into_iter()
+            .flat_map(|curve| census.iter().map(move |&r| (curve, r)))
+            .filter_map(|(curve, r)| HaloFigure::of(&sim.halo_census(r, curve), curve, false))
+            .collect()
+    };
     Ok(BenchCase {
         name: case.name.clone(),
         dimension: D,
@@ -193,6 +260,7 @@ fn measure_dim<const D: usize>(
             D,
             case.simulation.formulation == crate::case::Formulation::Corrected,
         ) as f64,
+        halos,
     })
 }
 
@@ -247,6 +315,10 @@ fn steel_cubes(name: &str, material: &str) -> String {
 /// Edge of the large cube in particles: 216³ = 10 077 696, the ten million particles of issue
 /// 14 (7.7 GB).
 pub const LARGE_CUBE: usize = 216;
+/// The ranks the halos are counted for: of the large case (10⁶ down to 10⁴ particles a rank),
+/// and of the others.
+const LARGE_CENSUS: &[usize] = &[2, 10, 100, 1000];
+const CENSUS: &[usize] = &[2, 3, 4, 8];
 
 /// The standard benchmark. First the large cube (10⁷ particles, 2 steps; skipped with a warning
 /// where the machine has too little memory for it, an error when asked for by name), then the
@@ -301,14 +373,14 @@ pub fn run_all(
                 tracing::warn!("skipped: {why}");
             }
             _ => {
-                let c = measure(&deck, "bench:cube", (all, ranks), 1, 2)?;
+                let c = measure(&deck, "bench:cube", (all, ranks), (1, 2), LARGE_CENSUS)?;
                 report(&c);
                 cases.push(c);
             }
         }
     }
     for &(n, steps) in sizes.iter().filter(|_| wanted("scaling")) {
-        let c = measure(&cube_deck(n), "bench:cube", (all, ranks), 1, steps)?;
+        let c = measure(&cube_deck(n), "bench:cube", (all, ranks), (1, steps), &[])?;
         report(&c);
         cases.push(c);
     }
@@ -356,7 +428,9 @@ pub fn run_all(
     ];
     for (_, text, label, w, s) in decks.into_iter().filter(|d| wanted(d.0)) {
         for &t in &threads {
-            let c = measure(&text, label, (t, ranks), w, s.max(2))?;
+            // The halos once a case, after its last run.
+            let census = if t == all { CENSUS } else { &[] };
+            let c = measure(&text, label, (t, ranks), (w, s.max(2)), census)?;
             report(&c);
             cases.push(c);
         }
@@ -385,5 +459,24 @@ pub fn line(c: &BenchCase) -> String {
         c.peak_rss_bytes as f64 / 1e6,
         c.bytes_per_particle,
         c.estimated_bytes_per_particle
-    )
+    ) + &c
+        .halos
+        .iter()
+        .map(|h| {
+            format!(
+                "\n  halo on {:>4} ranks ({}): {:.0} particles a rank, halo {:.1} % of them (largest {:.1} %), from {:.1} ranks (at most {})",
+                h.ranks,
+                match (h.actual, h.curve) {
+                    (true, _) => "this run's",
+                    (false, Curve::Cells) => "cell order",
+                    (false, Curve::Morton) => "Morton curve",
+                },
+                h.particles_per_rank,
+                100.0 * h.halo_share_mean,
+                100.0 * h.halo_share_max,
+                h.neighbour_ranks_mean,
+                h.neighbour_ranks_max
+            )
+        })
+        .collect::<String>()
 }

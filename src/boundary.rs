@@ -110,6 +110,15 @@ impl Ghosts {
         }
     }
 
+    /// The real particle that particle `index` is, or (a ghost) mirrors, through the ghosts
+    /// of earlier planes where a ghost mirrors one of those.
+    pub fn real_source(&self, mut index: usize, n_real: usize) -> usize {
+        while index >= n_real {
+            index = self.sources[index - n_real];
+        }
+        index
+    }
+
     /// Refresh the ghosts from the current state of their sources (same ghosts, same order).
     pub fn update<const D: usize>(&self, p: &mut Particles<D>, planes: &[Plane]) {
         let n = p.n_real;

@@ -4,8 +4,7 @@
 //! **Replicated state, split passes.** Every rank holds every particle and takes every step
 //! itself; the passes that cost are split: the neighbour lists, CN-SPH's corrections, the
 //! colour states, the rates and the mixing figures. Each rank evaluates a contiguous range of
-//! particles in cell order (a space-filling curve through the blocks of cells, so a range is a
-//! compact piece of the bodies), the ranges balanced by measured cost (see
+//! particles in cell order, the ranges balanced by measured cost (see
 //! `simulation::rebalance`), and the ranks then exchange their results (all-gather; the mixing
 //! figures by exact reductions). A particle's results come from exactly the arithmetic of the
 //! serial run whichever rank computes them, and everything else (binning, integration, sums,
@@ -13,6 +12,12 @@
 //! one on any number of ranks, and a checkpoint restarts on any number. What it does not give
 //! yet is memory per rank falling with the ranks (each holds the whole state) or scaling past
 //! a few ranks: that needs halos in place of the all-gather (see the README's "Not yet").
+//!
+//! **What a range needs of the others.** The cell order is a raster scan of the cells (the last
+//! axis fastest), so a contiguous range is a slab across the first axis: it touches at most two
+//! other ranges, and its [`Halo`] (counted by `strike bench`, `Simulation::halo_census`) grows
+//! with the ranks as a slab thins, not as a compact piece's surface. Halos for many ranks will
+//! want ranges along a space-filling curve through blocks of cells, or bisection.
 //!
 //! Without the feature, or when the program was not started by an MPI launcher, there is one
 //! rank and nothing is exchanged.
@@ -68,23 +73,7 @@ impl Ranks {
     /// Split 0..n into one contiguous range per rank with about equal total `cost` (of each
     /// particle, ≥ 0). Deterministic: the same on every rank for the same costs.
     pub fn split(&self, n: usize, cost: impl Fn(usize) -> f64) -> Vec<Range<usize>> {
-        if self.size == 1 {
-            return std::iter::once(0..n).collect();
-        }
-        let total: f64 = (0..n).map(&cost).sum();
-        let mut parts = Vec::with_capacity(self.size);
-        let (mut start, mut acc, mut i) = (0, 0.0, 0);
-        for r in 1..self.size {
-            let target = total * r as f64 / self.size as f64;
-            while i < n && acc < target {
-                acc += cost(i);
-                i += 1;
-            }
-            parts.push(start..i);
-            start = i;
-        }
-        parts.push(start..n);
-        parts
+        split_by_cost(self.size, n, cost)
     }
 
     /// After each rank has filled its own range `parts[rank]` of `v`, give every rank all of
@@ -162,6 +151,133 @@ impl Ranks {
         }
         let _ = code;
     }
+}
+
+/// Split 0..n into `count` (≥ 1) contiguous ranges with about equal total `cost` (of each
+/// element, ≥ 0): [`Ranks::split`] for any number of ranks.
+pub fn split_by_cost(count: usize, n: usize, cost: impl Fn(usize) -> f64) -> Vec<Range<usize>> {
+    if count <= 1 {
+        return std::iter::once(0..n).collect();
+    }
+    let total: f64 = (0..n).map(&cost).sum();
+    let mut parts = Vec::with_capacity(count);
+    let (mut start, mut acc, mut i) = (0, 0.0, 0);
+    for r in 1..count {
+        let target = total * r as f64 / count as f64;
+        while i < n && acc < target {
+            acc += cost(i);
+            i += 1;
+        }
+        parts.push(start..i);
+        start = i;
+    }
+    parts.push(start..n);
+    parts
+}
+
+/// What one rank's share of the particles needs of the others' each step: the halo a domain
+/// decomposition exchanges (DESIGN.md §8). The rate pass of a share reads its particles'
+/// neighbours, so the halo is every particle of another share that the share's neighbour
+/// lists name, directly or as the source of a symmetry plane's ghost; the lists reach
+/// h_i + h_j plus the skin, the "2 h_max plus the skin" of the design. Its messages are the
+/// ranks it comes from.
+#[derive(Debug, Clone, Copy, Default, PartialEq, Eq, serde::Serialize)]
+pub struct Halo {
+    /// Particles of the share.
+    pub own: usize,
+    /// Distinct particles of other shares that the share's lists name.
+    pub halo: usize,
+    /// The shares (ranks) those come from.
+    pub neighbour_ranks: usize,
+}
+
+/// The [`Halo`] of each of the shares `parts` of positions 0..n, position k holding particle
+/// `order[k]` (k itself without an order); `neighbours(i, out)` puts the particles that i's
+/// list names into `out` (ghosts already resolved to their real sources). `only`: the one
+/// share whose lists exist here (an MPI rank's; the others' are left at their `own`).
+pub fn halos(
+    parts: &[Range<usize>],
+    order: Option<&[u32]>,
+    only: Option<usize>,
+    neighbours: impl Fn(usize, &mut Vec<usize>) + Sync,
+) -> Vec<Halo> {
+    let n = parts.last().map_or(0, |r| r.end);
+    let particle = |k: usize| order.map_or(k, |o| o[k] as usize);
+    let mut owner = vec![0_u32; n];
+    for (r, range) in parts.iter().enumerate() {
+        for k in range.clone() {
+            owner[particle(k)] = r as u32;
+        }
+    }
+    parts
+        .par_iter()
+        .enumerate()
+        .map(|(r, range)| {
+            let mut halo = Halo {
+                own: range.len(),
+                ..Halo::default()
+            };
+            if only.is_some_and(|o| o != r) {
+                return halo;
+            }
+            let (mut found, mut buf) = (Vec::new(), Vec::new());
+            for k in range.clone() {
+                neighbours(particle(k), &mut buf);
+                found.extend(
+                    buf.iter()
+                        .filter(|&&j| owner[j] != r as u32)
+                        .map(|&j| j as u32),
+                );
+            }
+            found.par_sort_unstable();
+            found.dedup();
+            let mut from: Vec<u32> = found.iter().map(|&j| owner[j as usize]).collect();
+            from.sort_unstable();
+            from.dedup();
+            halo.halo = found.len();
+            halo.neighbour_ranks = from.len();
+            halo
+        })
+        .collect()
+}
+
+/// An order of the particles for splitting them into ranges ([`crate::simulation::Simulation::halo_census`]).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, serde::Serialize)]
+pub enum Curve {
+    /// The run's own: cell order, a raster scan of the cells (the last axis fastest).
+    Cells,
+    /// Morton's Z-order curve through the cells: each range a compact piece, as a
+    /// decomposition for many ranks would want.
+    Morton,
+}
+
+/// The particles at `x` along Morton's Z-order curve through cells of side `cell` (ties, in
+/// one cell, by index): the bits of the cell's coordinates interleaved, 21 an axis.
+pub fn morton_order<const D: usize>(x: &[crate::particles::Vector<D>], cell: f64) -> Vec<u32> {
+    let mut lo = [f64::INFINITY; D];
+    for p in x {
+        for k in 0..D {
+            lo[k] = lo[k].min(p[k]);
+        }
+    }
+    let cell = cell.max(f64::MIN_POSITIVE);
+    let key = |p: &crate::particles::Vector<D>| {
+        let mut key = 0_u64;
+        for bit in (0..21).rev() {
+            for k in 0..D {
+                let c = (((p[k] - lo[k]) / cell).floor() as u64).min((1 << 21) - 1);
+                key = (key << 1) | ((c >> bit) & 1);
+            }
+        }
+        key
+    };
+    let mut keyed: Vec<(u64, u32)> = x
+        .par_iter()
+        .enumerate()
+        .map(|(i, p)| (key(p), i as u32))
+        .collect();
+    keyed.par_sort_unstable();
+    keyed.into_iter().map(|(_, i)| i).collect()
 }
 
 /// Fill `out[i] = f(i)` for i in `owned` (in parallel), `out` holding n entries; those outside
@@ -288,6 +404,68 @@ mod tests {
         assert_eq!(
             Ranks::SERIAL.split(7, |_| 1.0),
             std::iter::once(0..7).collect::<Vec<_>>()
+        );
+    }
+
+    /// Morton's curve visits the four cells of a 2 × 2 square in Z order, and a 4 × 4 square
+    /// quadrant by quadrant.
+    #[test]
+    fn morton_order_visits_quadrants_in_turn() {
+        use crate::particles::Vector;
+        let x: Vec<Vector<2>> = (0..16)
+            .map(|i| Vector::<2>::new((i % 4) as f64 + 0.5, (i / 4) as f64 + 0.5))
+            .collect();
+        let order = morton_order(&x, 1.0);
+        // x = (column, row): the key interleaves column's bit first, so the curve runs up the
+        // rows first within each column pair.
+        assert_eq!(
+            order,
+            vec![0, 4, 1, 5, 8, 12, 9, 13, 2, 6, 3, 7, 10, 14, 11, 15]
+        );
+    }
+
+    /// A chain of particles each naming those within 3 places: split in four, the end shares
+    /// need 3 particles of one other share, the middle ones 6 of two; with the chain stored
+    /// backwards (an order) the same.
+    #[test]
+    fn halos_of_a_chain() {
+        let n = 100;
+        let near = |i: usize, out: &mut Vec<usize>| {
+            out.clear();
+            out.extend((i.saturating_sub(3)..(i + 4).min(n)).filter(|&j| j != i));
+        };
+        let parts = split_by_cost(4, n, |_| 1.0);
+        let expect = |own| {
+            [(3, 1), (6, 2), (6, 2), (3, 1)].map(|(halo, neighbour_ranks)| Halo {
+                own,
+                halo,
+                neighbour_ranks,
+            })
+        };
+        assert_eq!(halos(&parts, None, None, near), expect(25));
+        let backwards: Vec<u32> = (0..n as u32).rev().collect();
+        let mut got = halos(&parts, Some(&backwards), None, near);
+        got.reverse();
+        assert_eq!(got, expect(25));
+        // One share's lists only: the others are left at their size.
+        let one = halos(&parts, None, Some(1), near);
+        assert_eq!(one[1], expect(25)[1]);
+        assert_eq!(
+            one[0],
+            Halo {
+                own: 25,
+                halo: 0,
+                neighbour_ranks: 0
+            }
+        );
+        // One share needs nothing.
+        assert_eq!(
+            halos(&split_by_cost(1, n, |_| 1.0), None, None, near),
+            vec![Halo {
+                own: n,
+                halo: 0,
+                neighbour_ranks: 0
+            }]
         );
     }
 }

@@ -12,7 +12,7 @@ use crate::mixing::{self, PairMixing};
 use crate::neighbors::{NeighborList, Refresh};
 use crate::particles::{to3, Particles, Tensor};
 use crate::physics::{self, Model, Rates};
-use crate::ranks::Ranks;
+use crate::ranks::{Curve, Ranks};
 use crate::setup;
 use rayon::prelude::*;
 use std::any::Any;
@@ -335,6 +335,51 @@ impl<const D: usize> Simulation<D> {
     /// Seconds spent in the exchanges between ranks so far (0 on one rank).
     pub fn exchange_seconds(&self) -> f64 {
         self.exchanging
+    }
+
+    /// The halos `count` ranks would exchange at the current state (see [`crate::ranks::Halo`]):
+    /// the real particles put in the order of `curve` and split into `count` ranges balanced
+    /// by neighbour count, as a distributed run splits them (it uses [`Curve::Cells`]), each
+    /// range's halo read off this process's neighbour lists. The lists must be of every
+    /// particle (one rank) and current (after a step); otherwise, or before the first step,
+    /// there is nothing to count (empty).
+    pub fn halo_census(&self, count: usize, curve: Curve) -> Vec<crate::ranks::Halo> {
+        let p = &self.particles;
+        let n = p.n_real;
+        if self.ranks.size() > 1 || self.neighbors.len() != n || self.rates.particles.len() != n {
+            return Vec::new();
+        }
+        let order = match curve {
+            Curve::Cells => NeighborList::default()
+                .cell_order(&p.x[..n], &p.h[..n])
+                .to_vec(),
+            Curve::Morton => {
+                let h_max = p.h[..n].iter().copied().fold(0.0_f64, f64::max);
+                crate::ranks::morton_order(&p.x[..n], h_max)
+            }
+        };
+        let rates = &self.rates.particles;
+        let cost = |k: usize| f64::from(rates[order[k] as usize].neighbors) + 8.0;
+        let parts = crate::ranks::split_by_cost(count, n, cost);
+        crate::ranks::halos(&parts, Some(&order), None, |i, out| self.named(i, out))
+    }
+
+    /// This rank's halo under the ranks' current split (MPI; on one rank: none).
+    pub fn own_halo(&self) -> crate::ranks::Halo {
+        let parts = self.rank_ranges();
+        let rank = self.ranks.rank();
+        crate::ranks::halos(&parts, None, Some(rank), |i, out| self.named(i, out))[rank]
+    }
+
+    /// The real particles that particle i's list names (ghosts by their sources).
+    fn named(&self, i: usize, out: &mut Vec<usize>) {
+        let n = self.particles.n_real;
+        out.clear();
+        out.extend(
+            self.neighbors
+                .list(i)
+                .map(|j| self.ghosts.real_source(j as usize, n)),
+        );
     }
 
     /// The state a checkpoint keeps: the real particles and the scalars. Neighbour lists and
@@ -831,6 +876,44 @@ fn search_radii<'a, const D: usize>(
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// The halos of a cube of 20³ particles split in two: the ranges are the two halves along
+    /// the first axis (the slowest of the cell order), and each needs the other's two layers
+    /// nearest to it (the lists reach 2.52 Δp: h = 1.2 Δp and the skin), 800 particles; in
+    /// four, the inner quarters need layers either side. Before the first step nothing is
+    /// counted, and on one rank its own halo is empty.
+    #[test]
+    fn a_cube_split_in_slabs_needs_two_layers_of_each_neighbour() {
+        let case = crate::deck::parse(&crate::bench::cube_deck(20), "cube.toml").unwrap();
+        let mut sim = Simulation::<3>::new(&case).unwrap();
+        assert!(sim.halo_census(2, Curve::Cells).is_empty());
+        sim.step(f64::INFINITY).unwrap();
+        let halo = |own, halo, neighbour_ranks| crate::ranks::Halo {
+            own,
+            halo,
+            neighbour_ranks,
+        };
+        assert_eq!(sim.halo_census(1, Curve::Cells), vec![halo(8000, 0, 0)]);
+        assert_eq!(
+            sim.halo_census(2, Curve::Cells),
+            vec![halo(4000, 800, 1); 2]
+        );
+        // Split in four by cost, the outer slabs (cheaper surface particles) are wider and
+        // the cuts fall within layers: each side then needs from two to three layers.
+        let four = sim.halo_census(4, Curve::Cells);
+        assert_eq!(four.iter().map(|h| h.own).sum::<usize>(), 8000);
+        for (r, h) in four.iter().enumerate() {
+            let sides = if r == 0 || r == 3 { 1 } else { 2 };
+            assert_eq!(h.neighbour_ranks, sides, "{four:?}");
+            assert!((800 * sides..=1200 * sides).contains(&h.halo), "{four:?}");
+        }
+        // Morton's curve cuts the cube into two halves as well.
+        assert_eq!(
+            sim.halo_census(2, Curve::Morton),
+            vec![halo(4000, 800, 1); 2]
+        );
+        assert_eq!(sim.own_halo(), halo(8000, 0, 0));
+    }
 
     /// A step too small to advance the time (here: one particle's sound speed made absurd)
     /// stops the run with the particle that sets it, instead of stepping forever.
