@@ -330,6 +330,19 @@ fn bench_writes_its_report() {
             if num_cpus() > 1 { 2 } else { 1 },
             "{name}: {threads:?}"
         );
+        // The halos once a case (on all cores): 2, 3, 4 and 8 ranks along each curve; on 2
+        // ranks each needs some of the other's particles and nobody else's.
+        let halos: Vec<&serde_json::Value> = cases
+            .iter()
+            .filter(|c| c["name"] == name)
+            .flat_map(|c| c["halos"].as_array().unwrap())
+            .collect();
+        assert_eq!(halos.len(), 8, "{name}: {halos:?}");
+        for h in halos.iter().filter(|h| h["ranks"] == 2) {
+            assert_eq!(h["neighbour_ranks_max"], 1, "{name}: {h}");
+            let share = h["halo_share_mean"].as_f64().unwrap();
+            assert!(share > 0.0 && share < 0.5, "{name}: {h}");
+        }
     }
 }
 
