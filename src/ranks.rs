@@ -416,8 +416,8 @@ mod tests {
             .map(|i| Vector::<2>::new((i % 4) as f64 + 0.5, (i / 4) as f64 + 0.5))
             .collect();
         let order = morton_order(&x, 1.0);
-        // x = (column, row): the key interleaves column's bit first, so the curve runs up the
-        // rows first within each column pair.
+        // x = (column, row): of each pair of bits the column's is the more significant, so
+        // in a 2 × 2 square the curve takes one column's two rows, then the next column's.
         assert_eq!(
             order,
             vec![0, 4, 1, 5, 8, 12, 9, 13, 2, 6, 3, 7, 10, 14, 11, 15]
