@@ -262,11 +262,12 @@ pub fn morton_order<const D: usize>(x: &[crate::particles::Vector<D>], cell: f64
     }
     let cell = cell.max(f64::MIN_POSITIVE);
     let key = |p: &crate::particles::Vector<D>| {
+        let c: [u64; D] =
+            std::array::from_fn(|k| (((p[k] - lo[k]) / cell).floor() as u64).min((1 << 21) - 1));
         let mut key = 0_u64;
         for bit in (0..21).rev() {
-            for k in 0..D {
-                let c = (((p[k] - lo[k]) / cell).floor() as u64).min((1 << 21) - 1);
-                key = (key << 1) | ((c >> bit) & 1);
+            for ck in c {
+                key = (key << 1) | ((ck >> bit) & 1);
             }
         }
         key
