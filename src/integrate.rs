@@ -153,16 +153,18 @@ pub fn jaumann_rate<const D: usize>(s: &Tensor<D>, l: &Tensor<D>, g: f64) -> Ten
     (d - Tensor::<D>::identity() * (d.trace() / 3.0)) * (2.0 * g) + w * s - s * w
 }
 
-/// One leapfrog update of the real particles from the rates at t_n: kick, drift, and the
-/// material update (density, energy, stress, plastic strain, h, pressure, sound speed).
+/// One leapfrog update of the real particles `range` (all of them on one rank; under MPI the
+/// rank's own) from the rates at t_n: kick, drift, and the material update (density, energy,
+/// stress, plastic strain, h, pressure, sound speed). `dt`: (Δt_n, Δt_{n−1}).
 pub fn advance<const D: usize>(
     p: &mut Particles<D>,
     rates: &Rates<D>,
     model: &Model<D>,
-    dt: f64,
-    dt_prev: f64,
+    (dt, dt_prev): (f64, f64),
+    range: std::ops::Range<usize>,
 ) {
     let n = p.n_real;
+    let r = range.start.min(n)..range.end.min(n);
     let kick = 0.5 * (dt_prev + dt);
     let body = &p.body[..n];
     let h0 = &p.h0[..n];
@@ -170,31 +172,31 @@ pub fn advance<const D: usize>(
     let m_body = &model.body_prescribed;
     let m = &p.m[..n];
 
-    p.vh[..n]
+    p.vh[r.clone()]
         .par_iter_mut()
-        .zip(p.a[..n].par_iter_mut())
-        .zip(p.x[..n].par_iter_mut())
-        .zip(p.rho[..n].par_iter_mut())
-        .zip(p.e[..n].par_iter_mut())
-        .zip(p.s[..n].par_iter_mut())
-        .zip(p.eps_p[..n].par_iter_mut())
-        .zip(p.h[..n].par_iter_mut())
-        .zip(p.p[..n].par_iter_mut())
-        .zip(p.c[..n].par_iter_mut())
-        .zip(p.u[..n].par_iter_mut())
-        .zip(p.eh[..n].par_iter_mut())
-        .zip(p.damage[..n].par_iter_mut())
-        .zip(p.plastic_work[..n].par_iter_mut())
-        .zip(p.stretch[..n].par_iter_mut())
+        .zip(p.a[r.clone()].par_iter_mut())
+        .zip(p.x[r.clone()].par_iter_mut())
+        .zip(p.rho[r.clone()].par_iter_mut())
+        .zip(p.e[r.clone()].par_iter_mut())
+        .zip(p.s[r.clone()].par_iter_mut())
+        .zip(p.eps_p[r.clone()].par_iter_mut())
+        .zip(p.h[r.clone()].par_iter_mut())
+        .zip(p.p[r.clone()].par_iter_mut())
+        .zip(p.c[r.clone()].par_iter_mut())
+        .zip(p.u[r.clone()].par_iter_mut())
+        .zip(p.eh[r.clone()].par_iter_mut())
+        .zip(p.damage[r.clone()].par_iter_mut())
+        .zip(p.plastic_work[r.clone()].par_iter_mut())
+        .zip(p.stretch[r.clone()].par_iter_mut())
         .zip(
-            p.strain_rate[..n]
+            p.strain_rate[r.clone()]
                 .par_iter_mut()
-                .zip(p.dv[..n].par_iter_mut()),
+                .zip(p.dv[r.clone()].par_iter_mut()),
         )
         .enumerate()
         .for_each(
             |(
-                i,
+                k,
                 (
                     (
                         (
@@ -209,6 +211,7 @@ pub fn advance<const D: usize>(
                     (sr, dv),
                 ),
             )| {
+                let i = r.start + k;
                 let b = body[i] as usize;
                 let mat = model.material_of(body[i]);
                 let v_old = *vh;

@@ -329,6 +329,12 @@ impl NeighborList {
         self.owned = Some(owned);
     }
 
+    /// Whether real particle `i`'s list was rebuilt since the last full build (a partial
+    /// rebuild's "dirty" list: [`Refresh::Partial`]); the others are those of that build.
+    pub fn rebuilt_since_build(&self, i: usize) -> bool {
+        self.dirty.get(i).copied().unwrap_or(false)
+    }
+
     /// Whether real particle `i` has its list here (an MPI rank builds only its share's).
     pub fn listed(&self, i: usize) -> bool {
         i < self.n_lists && self.chunk_owned(i >> CHUNK_SHIFT)

@@ -238,6 +238,34 @@ impl<const D: usize> Particles<D> {
         for_each_field!(permute);
     }
 
+    /// Append the states of particles `idx` to `out`, field by field: the message of a halo
+    /// exchange (`ranks::Plan`), read back by [`Particles::unpack`] on the other rank.
+    pub fn pack(&self, idx: &[u32], out: &mut Vec<u8>) {
+        macro_rules! pack {
+            ($($f:ident),*) => { $(for &i in idx { out.extend_from_slice(bytes_of(&self.$f[i as usize])); })* };
+        }
+        for_each_field!(pack);
+    }
+
+    /// Set the states of particles `idx` from a message of [`Particles::pack`] for them.
+    pub fn unpack(&mut self, idx: &[u32], mut from: &[u8]) {
+        macro_rules! unpack {
+            ($($f:ident),*) => { $(for &i in idx { from = read_into(&mut self.$f[i as usize], from); })* };
+        }
+        for_each_field!(unpack);
+        debug_assert!(from.is_empty(), "{} bytes left over", from.len());
+    }
+
+    /// After each rank has advanced its own range `parts[rank]` of the real particles, give
+    /// every rank all of them (each field all-gathered; nothing to do on one rank).
+    pub fn share_real(&mut self, ranks: crate::ranks::Ranks, parts: &[std::ops::Range<usize>]) {
+        let n = self.n_real;
+        macro_rules! share {
+            ($($f:ident),*) => { $(ranks.share(&mut self.$f[..n], parts);)* };
+        }
+        for_each_field!(share);
+    }
+
     /// Position as a 3-vector (z = 0 in 2D), for output.
     pub fn position3(&self, i: usize) -> [f64; 3] {
         to3(&self.x[i])
@@ -247,6 +275,24 @@ impl<const D: usize> Particles<D> {
     pub fn velocity3(&self, i: usize) -> [f64; 3] {
         to3(&self.v[i])
     }
+}
+
+/// The bytes of a field's value. Every field of [`Particles`] is plain data without padding
+/// (numbers, and vectors and [`crate::tensor::Sym`]s of one number type), so each of its bytes
+/// is initialised.
+fn bytes_of<T: Copy>(v: &T) -> &[u8] {
+    // SAFETY: `v` is a valid T of `size_of::<T>()` initialised bytes (no padding, above).
+    unsafe { std::slice::from_raw_parts((v as *const T).cast::<u8>(), std::mem::size_of::<T>()) }
+}
+
+/// Set `v` from the first `size_of::<T>()` bytes of `from` (written by [`bytes_of`] for a T
+/// of this same program); returns the rest.
+fn read_into<'a, T: Copy>(v: &mut T, from: &'a [u8]) -> &'a [u8] {
+    let (b, rest) = from.split_at(std::mem::size_of::<T>());
+    // SAFETY: `b` holds exactly the bytes of a valid T (above); read unaligned, as a byte
+    // buffer need not be aligned for T.
+    *v = unsafe { std::ptr::read_unaligned(b.as_ptr().cast::<T>()) };
+    rest
 }
 
 /// A D-vector as 3 components, zero-padded.
@@ -279,5 +325,53 @@ pub fn estimated_bytes_per_particle(dimension: usize, corrected: bool) -> usize 
         (2, true) => 775,
         (_, false) => 810,
         (_, true) => 1160,
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// A store of `n` particles whose every field of every particle holds its own bytes (all
+    /// of them finite numbers), different from a freshly pushed particle's.
+    fn patterned(n: usize) -> Particles<3> {
+        let mut p = Particles::<3>::default();
+        for _ in 0..n {
+            p.push(Vector::<3>::zeros(), Vector::<3>::zeros(), 1.0, 1.0, 1.0, 0);
+        }
+        let mut fill = 0x10_u8;
+        macro_rules! pattern {
+            ($($f:ident),*) => { $(for i in 0..n {
+                let bytes = vec![fill; std::mem::size_of_val(&p.$f[i])];
+                read_into(&mut p.$f[i], &bytes);
+                fill = 0x10 + (fill - 0x0f) % 0x2f;
+            })* };
+        }
+        for_each_field!(pattern);
+        p
+    }
+
+    /// A halo message carries every field: particles 3 and 1 of one store, packed and unpacked
+    /// onto particles 0 and 2 of another, are theirs exactly, and the others are untouched.
+    #[test]
+    fn pack_and_unpack_carry_every_field() {
+        let from = patterned(4);
+        let mut to = Particles::<3>::default();
+        for _ in 0..4 {
+            to.push(Vector::<3>::zeros(), Vector::<3>::zeros(), 1.0, 1.0, 1.0, 0);
+        }
+        let mut expect = to.clone();
+        macro_rules! differ_and_expect {
+            ($($f:ident),*) => { $(
+                assert_ne!(from.$f[3], to.$f[0], stringify!($f));
+                expect.$f[0] = from.$f[3];
+                expect.$f[2] = from.$f[1];
+            )* };
+        }
+        for_each_field!(differ_and_expect);
+        let mut message = Vec::new();
+        from.pack(&[3, 1], &mut message);
+        to.unpack(&[0, 2], &message);
+        assert_eq!(to, expect);
     }
 }

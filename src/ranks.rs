@@ -1,17 +1,29 @@
 //! The processes of a distributed run (MPI, with the `mpi` cargo feature) and how the work of a
 //! step is split between them.
 //!
-//! **Replicated state, split passes.** Every rank holds every particle and takes every step
-//! itself; the passes that cost are split: the neighbour lists, CN-SPH's corrections, the
-//! colour states, the rates and the mixing figures. Each rank evaluates a contiguous range of
-//! particles in cell order, the ranges balanced by measured cost (see
-//! `simulation::rebalance`), and the ranks then exchange their results (all-gather; the mixing
-//! figures by exact reductions). A particle's results come from exactly the arithmetic of the
-//! serial run whichever rank computes them, and everything else (binning, integration, sums,
-//! checks) is the serial code on the same data, so an MPI run is bit-identical to the serial
-//! one on any number of ranks, and a checkpoint restarts on any number. What it does not give
-//! yet is memory per rank falling with the ranks (each holds the whole state) or scaling past
-//! a few ranks: that needs halos in place of the all-gather (see the README's "Not yet").
+//! **Own ranges, halos, replicated storage.** Every rank holds storage for every particle and
+//! takes every step, but computes and advances only its own contiguous range of particles in
+//! cell order, the ranges balanced by measured cost (see `simulation::rebalance`) and starting
+//! at multiples of the sums' block. Each step a rank
+//! - receives the state of its halo (the other ranks' particles that its own particles' lists
+//!   name, directly or through a symmetry plane's ghost) from their owners, point to point
+//!   ([`Plan`], rebuilt with the lists: [`Ranks::plan`], [`Ranks::all_to_all`]);
+//! - computes CN-SPH's corrections and the colour states of its range and shares them
+//!   (all-gather: the colour states are sparse and short-lived);
+//! - computes the rates of its range and advances it (the rates are not exchanged);
+//! - shares its particles' positions and smoothing lengths (all-gather), which every rank's
+//!   neighbour refresh reads, and its blocks' sums for the history (gathered and added in
+//!   block order);
+//! - takes the smallest time step, the checks and the mixing figures by exact reductions.
+//!
+//! At a full search (at least every `REORDER_EVERY` steps, where the ranges may change) and
+//! before a checkpoint or a cross-section the ranks all-gather every particle's state. A
+//! particle's results come from exactly the arithmetic of the serial run whichever rank
+//! computes them, and the sums are added in the serial order, so an MPI run is bit-identical
+//! to the serial one on any number of ranks, and a checkpoint restarts on any number. What it
+//! does not give yet is memory per rank falling with the ranks (each holds the whole store)
+//! or scaling past a few ranks (the positions are all-gathered every step): see the README's
+//! "Not yet".
 //!
 //! **What a range needs of the others.** The cell order is a raster scan of the cells (the last
 //! axis fastest), so a contiguous range is a slab across the first axis: it touches at most two
@@ -63,6 +75,12 @@ impl Ranks {
 
     pub fn size(&self) -> usize {
         self.size
+    }
+
+    /// Rank `rank` of `size`, as a test would have MPI give it (nothing is exchanged).
+    #[cfg(test)]
+    pub(crate) fn pretend(rank: usize, size: usize) -> Ranks {
+        Ranks { rank, size }
     }
 
     /// The rank that writes the outputs and prints.
@@ -142,6 +160,65 @@ impl Ranks {
         let _ = figures;
     }
 
+    /// The plan of this rank's halo: `needed`, the particles of other ranks that its passes
+    /// read (distinct, ascending), asked of their owners under the ranges `parts`; each
+    /// owner learns which of its particles to send (an all-to-all of the lists).
+    pub fn plan(&self, parts: &[Range<usize>], needed: &[u32]) -> Plan {
+        let mut recv = vec![Vec::new(); self.size];
+        for &j in needed {
+            let owner = parts.partition_point(|r| r.end <= j as usize);
+            recv[owner.min(self.size - 1)].push(j);
+        }
+        let send = self.all_to_all(&recv);
+        Plan { send, recv }
+    }
+
+    /// Send `out[r]` to each rank r and receive, in rank order, what each sent this one (MPI
+    /// all-to-all; on one rank the message to itself comes back).
+    pub fn all_to_all<T: Copy>(&self, out: &[Vec<T>]) -> Vec<Vec<T>> {
+        if self.size == 1 {
+            return out.to_vec();
+        }
+        #[cfg(feature = "mpi")]
+        return exchange::all_to_all(out);
+        #[cfg(not(feature = "mpi"))]
+        unreachable!("more than one rank without the mpi feature ({})", out.len());
+    }
+
+    /// The smallest of the ranks' `value`s (exact in any order; on one rank: `value`).
+    pub fn min(&self, value: f64) -> f64 {
+        #[cfg(feature = "mpi")]
+        if self.size > 1 {
+            use mpi::collective::SystemOperation;
+            use mpi::traits::*;
+            let mut min = value;
+            mpi::topology::SimpleCommunicator::world().all_reduce_into(
+                &value,
+                &mut min,
+                SystemOperation::min(),
+            );
+            return min;
+        }
+        value
+    }
+
+    /// The sum of the ranks' `count`s (exact; on one rank: `count`).
+    pub fn sum(&self, count: u64) -> u64 {
+        #[cfg(feature = "mpi")]
+        if self.size > 1 {
+            use mpi::collective::SystemOperation;
+            use mpi::traits::*;
+            let mut sum = 0_u64;
+            mpi::topology::SimpleCommunicator::world().all_reduce_into(
+                &count,
+                &mut sum,
+                SystemOperation::sum(),
+            );
+            return sum;
+        }
+        count
+    }
+
     /// Stop every rank at once (after an error on this one), with `code`; on one rank, return.
     pub fn abort(&self, code: i32) {
         #[cfg(feature = "mpi")]
@@ -173,6 +250,15 @@ pub fn split_by_cost(count: usize, n: usize, cost: impl Fn(usize) -> f64) -> Vec
     }
     parts.push(start..n);
     parts
+}
+
+/// The halo exchange of one rank (DESIGN.md §8): which of its particles it sends to each rank
+/// and which of each rank's it receives, both ascending. Built from the rank's neighbour lists
+/// after each search ([`Ranks::plan`]); the entries for the rank itself are empty.
+#[derive(Debug, Clone, Default, PartialEq, Eq)]
+pub struct Plan {
+    pub send: Vec<Vec<u32>>,
+    pub recv: Vec<Vec<u32>>,
 }
 
 /// What one rank's share of the particles needs of the others' each step: the halo a domain
@@ -354,9 +440,60 @@ pub fn start() -> Session {
 
 #[cfg(feature = "mpi")]
 mod exchange {
-    use mpi::datatype::{DynBuffer, DynBufferMut, PartitionMut, UserDatatype};
+    use mpi::datatype::{DynBuffer, DynBufferMut, Partition, PartitionMut, UserDatatype};
     use mpi::traits::*;
     use std::ops::Range;
+
+    /// All-to-all of variable length: `out[r]` to rank r, and back what each rank sent this
+    /// one, as opaque records (plain data of this same program on every rank).
+    pub fn all_to_all<T: Copy>(out: &[Vec<T>]) -> Vec<Vec<T>> {
+        let world = mpi::topology::SimpleCommunicator::world();
+        let record = UserDatatype::contiguous(
+            std::mem::size_of::<T>() as mpi::Count,
+            &u8::equivalent_datatype(),
+        );
+        let count = |n: usize| mpi::Count::try_from(n).expect("fewer than 2³¹ records a message");
+        let send_counts: Vec<mpi::Count> = out.iter().map(|o| count(o.len())).collect();
+        let mut recv_counts = vec![0 as mpi::Count; out.len()];
+        world.all_to_all_into(&send_counts[..], &mut recv_counts[..]);
+        let displs = |counts: &[mpi::Count]| -> Vec<mpi::Count> {
+            counts
+                .iter()
+                .scan(0, |at, &c| {
+                    let d = *at;
+                    *at += c;
+                    Some(d)
+                })
+                .collect()
+        };
+        let (send_displs, recv_displs) = (displs(&send_counts), displs(&recv_counts));
+        // Never an empty vector's dangling pointer: for one-byte records it is 0x1, which
+        // OpenMPI reads as MPI_IN_PLACE (and refuses, MPI_ERR_ARG).
+        let mut flat: Vec<T> = Vec::with_capacity(out.iter().map(Vec::len).sum::<usize>().max(1));
+        flat.extend(out.iter().flatten().copied());
+        let total: usize = recv_counts.iter().map(|&c| c as usize).sum();
+        let mut got: Vec<T> = Vec::with_capacity(total.max(1));
+        // SAFETY: the send buffer holds the records the counts say; the receive buffer has
+        // room for `total` records, which the all-to-all fills completely before `set_len`;
+        // a T is plain data (Copy), so its bytes may be copied between processes as they are.
+        unsafe {
+            let send = DynBuffer::from_raw(flat.as_ptr(), count(flat.len()), record.as_ref());
+            let mut recv = DynBufferMut::from_raw(got.as_mut_ptr(), count(total), record.as_ref());
+            let send = Partition::new(&send, &send_counts[..], &send_displs[..]);
+            let mut recv = PartitionMut::new(&mut recv, &recv_counts[..], &recv_displs[..]);
+            world.all_to_all_varcount_into(&send, &mut recv);
+            got.set_len(total);
+        }
+        let mut rest = &got[..];
+        recv_counts
+            .iter()
+            .map(|&c| {
+                let (mine, after) = rest.split_at(c as usize);
+                rest = after;
+                mine.to_vec()
+            })
+            .collect()
+    }
 
     /// All-gather of the ranks' ranges of `v`, element by element as opaque bytes (the
     /// records are plain data of this same program on every rank).
@@ -367,7 +504,9 @@ mod exchange {
             &u8::equivalent_datatype(),
         );
         let count = |n: usize| mpi::Count::try_from(n).expect("fewer than 2³¹ particles a rank");
-        let mine: Vec<T> = v[parts[rank].clone()].to_vec();
+        // Never an empty vector's dangling pointer (see `all_to_all`).
+        let mut mine: Vec<T> = Vec::with_capacity(parts[rank].len().max(1));
+        mine.extend_from_slice(&v[parts[rank].clone()]);
         let counts: Vec<mpi::Count> = parts.iter().map(|r| count(r.len())).collect();
         let displs: Vec<mpi::Count> = parts.iter().map(|r| count(r.start)).collect();
         // SAFETY: both buffers hold as many records of `record`'s size as the counts say, and

@@ -148,6 +148,8 @@ impl<const D: usize> Run<'_, D> {
             return Ok(());
         }
         self.last_snapshot = Some(self.sim.state.step);
+        // The checkpoint holds every particle: under MPI each rank has advanced only its own.
+        self.sim.gather();
         let (step, time) = (self.sim.state.step, self.sim.state.time);
         let name = if ranks.size() == 1 {
             let name = format!("{}_{step:06}.vtp", self.case.name);
@@ -208,6 +210,8 @@ impl<const D: usize> Run<'_, D> {
             if t > self.sim.state.time + tol {
                 break;
             }
+            // A section may cut any particle: under MPI each rank has advanced only its own.
+            self.sim.gather();
             let spec = &self.case.output.pictures[k];
             let thickness = section_thickness(self.case, spec);
             self.state.frames[k].push(picture::extract_section(

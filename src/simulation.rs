@@ -88,6 +88,10 @@ pub struct Simulation<const D: usize> {
     /// set at each full search.
     ranks: Ranks,
     parts: Vec<Range<usize>>,
+    /// This rank's halo: which particles it sends to and receives from the others each step.
+    plan: crate::ranks::Plan,
+    /// The particles of other ranks that this rank's lists named at the last full build.
+    halo: Vec<u32>,
     /// Seconds this rank spent on its own share since the ranges were set (to balance the
     /// next ones), and in the exchanges between ranks in all.
     busy: f64,
@@ -125,7 +129,10 @@ pub struct SearchStats {
 
 /// Sums over the particles are taken per block of this many particles, in parallel, and the
 /// blocks' sums are then added in block order: the same additions whatever the thread count.
-const BLOCK: usize = 2048;
+/// Under MPI each rank sums its own blocks, the ranks' ranges starting at multiples of it
+/// (`rebalance`), and the blocks' sums are gathered before they are added, so the sums are
+/// those of one process to the bit.
+const BLOCK: usize = 256;
 
 /// Partial sums of one block of particles (see [`block_sums`]).
 #[derive(Debug, Clone, Copy)]
@@ -188,18 +195,41 @@ impl Sums {
 }
 
 /// `f` over the blocks of `BLOCK` particles of 0..n in parallel (into `scratch`), then the
-/// blocks merged in order.
+/// blocks merged in order. Under MPI each rank takes the blocks of its own range (see
+/// [`blocks_of`]) and the ranks then share them.
 fn block_sums(
     n: usize,
     scratch: &mut Vec<Sums>,
+    (ranks, parts): (Ranks, &[Range<usize>]),
     f: impl Fn(std::ops::Range<usize>) -> Sums + Sync,
 ) -> Sums {
     scratch.resize(n.div_ceil(BLOCK), Sums::default());
-    scratch
+    let blocks = blocks_of(parts, 1);
+    let mine = blocks[ranks.rank()].clone();
+    scratch[mine.clone()]
         .par_iter_mut()
         .enumerate()
-        .for_each(|(b, s)| *s = f(b * BLOCK..n.min((b + 1) * BLOCK)));
+        .for_each(|(k, s)| {
+            let b = mine.start + k;
+            *s = f(b * BLOCK..n.min((b + 1) * BLOCK))
+        });
+    ranks.share(scratch, &blocks);
     scratch.iter().fold(Sums::default(), |a, s| a.merge(s))
+}
+
+/// The blocks of `BLOCK` particles of each range of `parts` (whose ranges start at multiples
+/// of `BLOCK`: `rebalance`), as ranges of entries of `per` entries a block.
+fn blocks_of(parts: &[Range<usize>], per: usize) -> Vec<Range<usize>> {
+    parts
+        .iter()
+        .map(|r| {
+            if r.is_empty() {
+                r.start / BLOCK * per..r.start / BLOCK * per
+            } else {
+                r.start / BLOCK * per..r.end.div_ceil(BLOCK) * per
+            }
+        })
+        .collect()
 }
 
 /// Real particles are put back in cell order at least this often (steps), for memory locality.
@@ -293,6 +323,8 @@ impl<const D: usize> Simulation<D> {
             lambda: Vec::new(),
             ranks: Ranks::SERIAL,
             parts: Vec::new(),
+            plan: Default::default(),
+            halo: Vec::new(),
             busy: 0.0,
             exchanging: 0.0,
             balanced: 0,
@@ -314,6 +346,18 @@ impl<const D: usize> Simulation<D> {
             self.parts.clone()
         } else {
             self.ranks.split(n, |_| 1.0)
+        }
+    }
+
+    /// Under MPI, give every rank every particle's current state: between full searches each
+    /// rank advances only its own range (and the halo it reads), so the root must gather before
+    /// it writes what holds all of them (a checkpoint, a cross-section). Nothing on one rank
+    /// or before the first step.
+    pub fn gather(&mut self) {
+        if self.ranks.size() > 1 && self.parts.len() == self.ranks.size() {
+            let lap = Instant::now();
+            self.particles.share_real(self.ranks, &self.parts);
+            self.exchanging += lap.elapsed().as_secs_f64();
         }
     }
 
@@ -369,6 +413,35 @@ impl<const D: usize> Simulation<D> {
         let parts = self.rank_ranges();
         let rank = self.ranks.rank();
         crate::ranks::halos(&parts, None, Some(rank), |i, out| self.named(i, out))[rank]
+    }
+
+    /// The particles of other ranks that this rank's passes read: those that the lists of its
+    /// own particles `owned` name (ghosts by their sources), ascending; with `only_rebuilt`,
+    /// those of the lists rebuilt since the last full build.
+    fn needed(&self, owned: &Range<usize>, only_rebuilt: bool) -> Vec<u32> {
+        let n = self.particles.n_real;
+        let nl = &self.neighbors;
+        let mut found: Vec<u32> = owned
+            .clone()
+            .into_par_iter()
+            .filter(|&i| !only_rebuilt || nl.rebuilt_since_build(i))
+            .fold(Vec::new, |mut found, i| {
+                found.extend(
+                    self.neighbors
+                        .list(i)
+                        .map(|j| self.ghosts.real_source(j as usize, n))
+                        .filter(|s| !owned.contains(s))
+                        .map(|s| s as u32),
+                );
+                found
+            })
+            .reduce(Vec::new, |mut a, mut b| {
+                a.append(&mut b);
+                a
+            });
+        found.par_sort_unstable();
+        found.dedup();
+        found
     }
 
     /// The real particles that particle i's list names (ghosts by their sources).
@@ -460,6 +533,16 @@ impl<const D: usize> Simulation<D> {
                 self.busy += start.elapsed().as_secs_f64();
             }
         }
+        let distributed = self.ranks.size() > 1 && self.parts.len() == self.ranks.size();
+        if need == Refresh::Full && distributed {
+            // Each rank has advanced only its own range since the ranges were set: before they
+            // change (and the order with them), every rank takes every particle's state, and
+            // the rates, whose neighbour counts weigh the new ranges.
+            let lap = Instant::now();
+            p.share_real(self.ranks, &self.parts);
+            self.ranks.share(&mut self.rates.particles, &self.parts);
+            self.exchanging += lap.elapsed().as_secs_f64();
+        }
         if need == Refresh::Full {
             let reordered = reorder && self.state.step > 0;
             if reordered {
@@ -497,10 +580,53 @@ impl<const D: usize> Simulation<D> {
             self.stats.searches += 1;
             self.busy += start.elapsed().as_secs_f64();
         }
+        if self.ranks.size() > 1 {
+            // The halo: every particle of another rank that this rank's lists name (ghosts by
+            // their sources) comes from its owner, as the owner advanced it. The plan changes
+            // with the lists; the ghosts then take their sources' states again. After a full
+            // search every rank holds every particle's state already.
+            let lap = Instant::now();
+            if need != Refresh::Valid {
+                // A partial rebuild changes only the rebuilt lists: their particles join the
+                // full build's halo (a few too many until the next full build cost nothing).
+                let owned = &self.parts[self.ranks.rank()];
+                let needed = if need == Refresh::Full {
+                    self.halo = self.needed(owned, false);
+                    self.halo.clone()
+                } else {
+                    let mut needed = self.needed(owned, true);
+                    needed.extend_from_slice(&self.halo);
+                    needed.par_sort_unstable();
+                    needed.dedup();
+                    needed
+                };
+                self.plan = self.ranks.plan(&self.parts, &needed);
+            }
+            if need != Refresh::Full {
+                let p = &mut self.particles;
+                let out: Vec<Vec<u8>> = self
+                    .plan
+                    .send
+                    .iter()
+                    .map(|idx| {
+                        let mut b = Vec::new();
+                        p.pack(idx, &mut b);
+                        b
+                    })
+                    .collect();
+                for (idx, bytes) in self.plan.recv.iter().zip(self.ranks.all_to_all(&out)) {
+                    p.unpack(idx, &bytes);
+                }
+                self.ghosts.update(p, &self.symmetry);
+            }
+            self.exchanging += lap.elapsed().as_secs_f64();
+        }
+        let p = &mut self.particles;
         // This rank's time on its share, without the waits in the exchanges.
         let mut lap = Instant::now();
         let (ranks, parts) = (self.ranks, &self.parts[..]);
-        let owned = &parts[ranks.rank()];
+        let owned = parts[ranks.rank()].clone();
+        let owned = &owned;
         // CN-SPH: the gradient corrections, in their own pass before the rates.
         self.corr.clear();
         self.lambda.clear();
@@ -597,10 +723,7 @@ impl<const D: usize> Simulation<D> {
         }
         std::mem::swap(&mut self.rates.contact_force, &mut p.contact_force);
         self.busy += lap.elapsed().as_secs_f64();
-        lap = Instant::now();
-        ranks.share(&mut self.rates.particles, parts);
-        ranks.share(&mut p.contact_force[..p.n_real], parts);
-        self.exchanging += lap.elapsed().as_secs_f64();
+        // Each rank's rates stay its own: it advances only its own particles.
         let rates = &self.rates.particles;
         let near = |i: usize| rates[i].min_interbody_gap.is_finite();
         let (nl, spacing) = (&self.neighbors, &self.spacing);
@@ -614,12 +737,12 @@ impl<const D: usize> Simulation<D> {
         let n = p.n_real;
         // The stable step, its growth limited to 25 % a step; the collapse check uses it before
         // it is shortened to land on an output time. (min and max are exact in any order.)
-        let mut dt_stable = self
-            .rates
-            .particles
-            .par_iter()
-            .map(|r| r.dt)
-            .reduce(|| f64::INFINITY, f64::min);
+        let mut dt_stable = ranks.min(
+            self.rates.particles[owned.clone()]
+                .par_iter()
+                .map(|r| r.dt)
+                .reduce(|| f64::INFINITY, f64::min),
+        );
         if self.state.dt_prev > 0.0 {
             dt_stable = dt_stable.min(1.25 * self.state.dt_prev);
         }
@@ -631,7 +754,8 @@ impl<const D: usize> Simulation<D> {
         let p = &self.particles;
         let rates = &self.rates.particles;
         let g = self.model.gravity;
-        let old = block_sums(n, &mut self.sums_old, |range| {
+        let split = (self.ranks, &self.parts[..]);
+        let old = block_sums(n, &mut self.sums_old, split, |range| {
             let mut s = Sums::default();
             for i in range {
                 s.add_half_step(p, i);
@@ -644,12 +768,16 @@ impl<const D: usize> Simulation<D> {
             s
         });
         // Contact force per body, by the same blocks.
+        let per = bodies.max(1);
         self.body_force_blocks
-            .resize(n.div_ceil(BLOCK) * bodies, [0.0; 3]);
-        self.body_force_blocks
-            .par_chunks_mut(bodies.max(1))
+            .resize(n.div_ceil(BLOCK) * per, [0.0; 3]);
+        let blocks = blocks_of(&self.parts, per);
+        let mine = blocks[self.ranks.rank()].clone();
+        self.body_force_blocks[mine.clone()]
+            .par_chunks_mut(per)
             .enumerate()
-            .for_each(|(b, fb)| {
+            .for_each(|(k, fb)| {
+                let b = mine.start / per + k;
                 fb.fill([0.0; 3]);
                 for i in b * BLOCK..n.min((b + 1) * BLOCK) {
                     let f = to3(&p.contact_force[i]);
@@ -659,11 +787,17 @@ impl<const D: usize> Simulation<D> {
                     }
                 }
             });
+        self.ranks.share(&mut self.body_force_blocks, &blocks);
         let mut d = Diagnostics {
             time: self.state.time,
             dt,
             body_contact_force: vec![[0.0; 3]; bodies],
-            interactions: rates.par_iter().map(|r| r.neighbors as usize).sum(),
+            interactions: self.ranks.sum(
+                rates[owned.clone()]
+                    .par_iter()
+                    .map(|r| u64::from(r.neighbors))
+                    .sum(),
+            ) as usize,
             contact: old.contact,
             gravity: old.gravity,
             max_pressure: old.max_pressure,
@@ -685,13 +819,22 @@ impl<const D: usize> Simulation<D> {
             &mut self.particles,
             &self.rates,
             &self.model,
-            dt,
-            self.state.dt_prev,
+            (dt, self.state.dt_prev),
+            owned.clone(),
         );
         boundary::reflect_crossed(&mut self.particles, &self.symmetry);
+        if self.ranks.size() > 1 {
+            // Where every particle is, and its reach: what the next step's search reads.
+            let lap = Instant::now();
+            let p = &mut self.particles;
+            self.ranks.share(&mut p.x[..n], &self.parts);
+            self.ranks.share(&mut p.h[..n], &self.parts);
+            self.exchanging += lap.elapsed().as_secs_f64();
+        }
 
         let p = &self.particles;
-        let new = block_sums(n, &mut self.sums_new, |range| {
+        let split = (self.ranks, &self.parts[..]);
+        let new = block_sums(n, &mut self.sums_new, split, |range| {
             let mut s = Sums::default();
             for i in range {
                 s.add_half_step(p, i);
@@ -720,63 +863,25 @@ impl<const D: usize> Simulation<D> {
 
     /// The rates at t_n must be finite, the density must stay positive over the step, no
     /// particle may exceed the speed limit and the step must not collapse.
-    fn check(&self, dt: f64, dt_stable: f64, dt_first: f64) -> Result<()> {
+    ///
+    /// Under MPI each rank looks at its own particles; where any finds one, or the step fails,
+    /// every rank takes every particle's state and rates and looks again at all of them, so
+    /// that every rank names the particle one process would.
+    fn check(&mut self, dt: f64, dt_stable: f64, dt_first: f64) -> Result<()> {
+        let n = self.particles.n_real;
+        let parts = self.rank_ranges();
+        let mut bad = self.first_bad(parts[self.ranks.rank()].clone(), dt);
+        let step_fails = !(dt.is_finite() && dt > 0.0)
+            || self.state.time + dt == self.state.time
+            || dt_stable < 1e-6 * dt_first
+            || dt_stable.is_nan();
+        if self.ranks.size() > 1 && (self.ranks.any(bad.is_some()) || step_fails) {
+            self.particles.share_real(self.ranks, &parts);
+            self.ranks.share(&mut self.rates.particles[..n], &parts);
+            bad = self.first_bad(0..n, dt);
+        }
         let p = &self.particles;
         let r = &self.rates.particles;
-        // The state first (a bad particle spoils its neighbours' rates), then the rates.
-        let state = (0..p.n_real).into_par_iter().find_map_first(|i| {
-            let finite = p.x[i].iter().all(|c| c.is_finite())
-                && p.v[i].iter().all(|c| c.is_finite())
-                && p.rho[i].is_finite()
-                && p.e[i].is_finite()
-                && p.p[i].is_finite()
-                && p.s[i].is_finite();
-            if !finite {
-                Some((i, "position, velocity, density, energy or stress is not finite (NaN/inf)".to_string()))
-            } else if p.v[i].norm() > self.state.speed_limit {
-                Some((i, format!(
-                    "speed {:.4e} m/s exceeds 10× the fastest initial speed or sound speed ({:.4e} m/s)",
-                    p.v[i].norm(),
-                    self.state.speed_limit
-                )))
-            } else {
-                None
-            }
-        });
-        let bad = state.or_else(|| {
-            (0..p.n_real).into_par_iter().find_map_first(|i| {
-                if !(r[i].acc.iter().all(|c| c.is_finite())
-                    && r[i].drho.is_finite()
-                    && r[i].de.is_finite()
-                    && r[i].grad_v.iter().all(|c| c.is_finite()))
-                {
-                    Some((
-                        i,
-                        "acceleration or strain rate is not finite (NaN/inf)".to_string(),
-                    ))
-                } else if integrate::next_density(
-                    self.model.material_of(p.body[i]),
-                    p.rho[i],
-                    dt * r[i].drho,
-                    p.e[i],
-                    p.damage[i] >= 1.0,
-                )
-                .partial_cmp(&0.0)
-                    != Some(std::cmp::Ordering::Greater)
-                {
-                    Some((
-                        i,
-                        format!(
-                            "density would fall to {:.4e} kg/m³ (from {:.4e})",
-                            p.rho[i] + dt * r[i].drho,
-                            p.rho[i]
-                        ),
-                    ))
-                } else {
-                    None
-                }
-            })
-        });
         let (i, cause) = match bad {
             Some(b) => b,
             None if !(dt.is_finite() && dt > 0.0) || self.state.time + dt == self.state.time => {
@@ -812,6 +917,67 @@ impl<const D: usize> Simulation<D> {
                 self.body_names[p.body[i] as usize],
                 pos.join(", ")
             ),
+        })
+    }
+
+    /// The first of the particles `range` whose state or rates are not fit for a step of `dt`,
+    /// and why.
+    fn first_bad(&self, range: Range<usize>, dt: f64) -> Option<(usize, String)> {
+        let p = &self.particles;
+        let r = &self.rates.particles;
+        // The state first (a bad particle spoils its neighbours' rates), then the rates.
+        let state = range.clone().into_par_iter().find_map_first(|i| {
+            let finite = p.x[i].iter().all(|c| c.is_finite())
+                && p.v[i].iter().all(|c| c.is_finite())
+                && p.rho[i].is_finite()
+                && p.e[i].is_finite()
+                && p.p[i].is_finite()
+                && p.s[i].is_finite();
+            if !finite {
+                Some((i, "position, velocity, density, energy or stress is not finite (NaN/inf)".to_string()))
+            } else if p.v[i].norm() > self.state.speed_limit {
+                Some((i, format!(
+                    "speed {:.4e} m/s exceeds 10× the fastest initial speed or sound speed ({:.4e} m/s)",
+                    p.v[i].norm(),
+                    self.state.speed_limit
+                )))
+            } else {
+                None
+            }
+        });
+        state.or_else(|| {
+            range.into_par_iter().find_map_first(|i| {
+                if !(r[i].acc.iter().all(|c| c.is_finite())
+                    && r[i].drho.is_finite()
+                    && r[i].de.is_finite()
+                    && r[i].grad_v.iter().all(|c| c.is_finite()))
+                {
+                    Some((
+                        i,
+                        "acceleration or strain rate is not finite (NaN/inf)".to_string(),
+                    ))
+                } else if integrate::next_density(
+                    self.model.material_of(p.body[i]),
+                    p.rho[i],
+                    dt * r[i].drho,
+                    p.e[i],
+                    p.damage[i] >= 1.0,
+                )
+                .partial_cmp(&0.0)
+                    != Some(std::cmp::Ordering::Greater)
+                {
+                    Some((
+                        i,
+                        format!(
+                            "density would fall to {:.4e} kg/m³ (from {:.4e})",
+                            p.rho[i] + dt * r[i].drho,
+                            p.rho[i]
+                        ),
+                    ))
+                } else {
+                    None
+                }
+            })
         })
     }
 }
@@ -852,7 +1018,21 @@ fn rebalance<const D: usize>(
         let owner = old.partition_point(|r| r.end <= k);
         base(k) * per.get(owner).copied().unwrap_or(1.0)
     };
-    ranks.split(n, cost)
+    // Each range starts at a multiple of BLOCK, so that each rank sums whole blocks of its own
+    // (`block_sums`): every boundary is moved to the nearest one.
+    let mut parts = ranks.split(n, cost);
+    let mut start = 0;
+    let last = parts.len() - 1;
+    for (r, range) in parts.iter_mut().enumerate() {
+        let end = if r == last {
+            n
+        } else {
+            ((range.end + BLOCK / 2) / BLOCK * BLOCK).clamp(start, n)
+        };
+        *range = start..end;
+        start = end;
+    }
+    parts
 }
 
 /// The neighbour search radius of each particle (ghosts included): its smoothing length, or
@@ -876,6 +1056,19 @@ fn search_radii<'a, const D: usize>(
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// The ranks' ranges start at multiples of the sums' block, nearest the balanced split, so
+    /// that each rank sums whole blocks of its own; a range too short for a block is empty.
+    #[test]
+    fn ranges_start_at_whole_blocks() {
+        let none: (&[Range<usize>], &[f64]) = (&[], &[]);
+        let parts = rebalance::<3>(Ranks::pretend(0, 3), 1000, &[], none, None);
+        assert_eq!(parts, vec![0..256, 256..768, 768..1000]);
+        assert_eq!(blocks_of(&parts, 2), vec![0..2, 2..6, 6..8]);
+        let parts = rebalance::<3>(Ranks::pretend(1, 3), 300, &[], none, None);
+        assert_eq!(parts, vec![0..0, 0..256, 256..300]);
+        assert_eq!(blocks_of(&parts, 1), vec![0..0, 0..1, 1..2]);
+    }
 
     /// The halos of a cube of 20³ particles split in two: the ranges are the two halves along
     /// the first axis (the slowest of the cell order), and each needs the other's two layers
