@@ -123,14 +123,7 @@ impl Ranks {
         #[cfg(feature = "mpi")]
         if self.size > 1 {
             use mpi::collective::SystemOperation;
-            use mpi::traits::*;
-            let mut any = 0_i32;
-            mpi::topology::SimpleCommunicator::world().all_reduce_into(
-                &i32::from(flag),
-                &mut any,
-                SystemOperation::max(),
-            );
-            return any != 0;
+            return exchange::all_reduce(i32::from(flag), SystemOperation::max()) != 0;
         }
         flag
     }
@@ -190,14 +183,7 @@ impl Ranks {
         #[cfg(feature = "mpi")]
         if self.size > 1 {
             use mpi::collective::SystemOperation;
-            use mpi::traits::*;
-            let mut min = value;
-            mpi::topology::SimpleCommunicator::world().all_reduce_into(
-                &value,
-                &mut min,
-                SystemOperation::min(),
-            );
-            return min;
+            return exchange::all_reduce(value, SystemOperation::min());
         }
         value
     }
@@ -207,14 +193,7 @@ impl Ranks {
         #[cfg(feature = "mpi")]
         if self.size > 1 {
             use mpi::collective::SystemOperation;
-            use mpi::traits::*;
-            let mut sum = 0_u64;
-            mpi::topology::SimpleCommunicator::world().all_reduce_into(
-                &count,
-                &mut sum,
-                SystemOperation::sum(),
-            );
-            return sum;
+            return exchange::all_reduce(count, SystemOperation::sum());
         }
         count
     }
@@ -443,6 +422,13 @@ mod exchange {
     use mpi::datatype::{DynBuffer, DynBufferMut, Partition, PartitionMut, UserDatatype};
     use mpi::traits::*;
     use std::ops::Range;
+
+    /// `value` reduced over the ranks by `op`, the same on every rank.
+    pub fn all_reduce<T: Equivalence + Copy>(value: T, op: mpi::collective::SystemOperation) -> T {
+        let mut out = value;
+        mpi::topology::SimpleCommunicator::world().all_reduce_into(&value, &mut out, op);
+        out
+    }
 
     /// All-to-all of variable length: `out[r]` to rank r, and back what each rank sent this
     /// one, as opaque records (plain data of this same program on every rank).
