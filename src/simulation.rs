@@ -415,6 +415,47 @@ impl<const D: usize> Simulation<D> {
         crate::ranks::halos(&parts, None, Some(rank), |i, out| self.named(i, out))[rank]
     }
 
+    /// Under MPI: every particle of another rank that this rank's lists name (ghosts by their
+    /// sources) comes from its owner, as the owner advanced it, and the ghosts then take their
+    /// sources' states again. The plan changes with the lists (`need`: this step's search);
+    /// after a full search every rank holds every particle's state already.
+    fn receive_halo(&mut self, need: Refresh) {
+        if need != Refresh::Valid {
+            // A partial rebuild changes only the rebuilt lists: their particles join the full
+            // build's halo (a few too many until the next full build cost nothing).
+            let owned = &self.parts[self.ranks.rank()];
+            let needed = if need == Refresh::Full {
+                self.halo = self.needed(owned, false);
+                self.halo.clone()
+            } else {
+                let mut needed = self.needed(owned, true);
+                needed.extend_from_slice(&self.halo);
+                needed.par_sort_unstable();
+                needed.dedup();
+                needed
+            };
+            self.plan = self.ranks.plan(&self.parts, &needed);
+        }
+        if need == Refresh::Full {
+            return;
+        }
+        let p = &mut self.particles;
+        let out: Vec<Vec<u8>> = self
+            .plan
+            .send
+            .iter()
+            .map(|idx| {
+                let mut b = Vec::new();
+                p.pack(idx, &mut b);
+                b
+            })
+            .collect();
+        for (idx, bytes) in self.plan.recv.iter().zip(self.ranks.all_to_all(&out)) {
+            p.unpack(idx, &bytes);
+        }
+        self.ghosts.update(p, &self.symmetry);
+    }
+
     /// The particles of other ranks that this rank's passes read: those that the lists of its
     /// own particles `owned` name (ghosts by their sources), ascending; with `only_rebuilt`,
     /// those of the lists rebuilt since the last full build.
@@ -427,8 +468,7 @@ impl<const D: usize> Simulation<D> {
             .filter(|&i| !only_rebuilt || nl.rebuilt_since_build(i))
             .fold(Vec::new, |mut found, i| {
                 found.extend(
-                    self.neighbors
-                        .list(i)
+                    nl.list(i)
                         .map(|j| self.ghosts.real_source(j as usize, n))
                         .filter(|s| !owned.contains(s))
                         .map(|s| s as u32),
@@ -581,44 +621,8 @@ impl<const D: usize> Simulation<D> {
             self.busy += start.elapsed().as_secs_f64();
         }
         if self.ranks.size() > 1 {
-            // The halo: every particle of another rank that this rank's lists name (ghosts by
-            // their sources) comes from its owner, as the owner advanced it. The plan changes
-            // with the lists; the ghosts then take their sources' states again. After a full
-            // search every rank holds every particle's state already.
             let lap = Instant::now();
-            if need != Refresh::Valid {
-                // A partial rebuild changes only the rebuilt lists: their particles join the
-                // full build's halo (a few too many until the next full build cost nothing).
-                let owned = &self.parts[self.ranks.rank()];
-                let needed = if need == Refresh::Full {
-                    self.halo = self.needed(owned, false);
-                    self.halo.clone()
-                } else {
-                    let mut needed = self.needed(owned, true);
-                    needed.extend_from_slice(&self.halo);
-                    needed.par_sort_unstable();
-                    needed.dedup();
-                    needed
-                };
-                self.plan = self.ranks.plan(&self.parts, &needed);
-            }
-            if need != Refresh::Full {
-                let p = &mut self.particles;
-                let out: Vec<Vec<u8>> = self
-                    .plan
-                    .send
-                    .iter()
-                    .map(|idx| {
-                        let mut b = Vec::new();
-                        p.pack(idx, &mut b);
-                        b
-                    })
-                    .collect();
-                for (idx, bytes) in self.plan.recv.iter().zip(self.ranks.all_to_all(&out)) {
-                    p.unpack(idx, &bytes);
-                }
-                self.ghosts.update(p, &self.symmetry);
-            }
+            self.receive_halo(need);
             self.exchanging += lap.elapsed().as_secs_f64();
         }
         let p = &mut self.particles;
