@@ -130,6 +130,18 @@ impl Ghosts {
             mirror(p, n + ghosts.start..n + ghosts.end, plane);
         }
     }
+
+    /// [`Ghosts::update`] of the positions and smoothing lengths only: what the neighbour
+    /// search reads. Under MPI the rest of the ghosts' state waits for the halo, whose
+    /// sources another rank advanced (`Simulation::receive_halo` updates them whole).
+    pub fn update_positions<const D: usize>(&self, p: &mut Particles<D>, planes: &[Plane]) {
+        let n = p.n_real;
+        for (plane, w) in planes.iter().zip(self.first.windows(2)) {
+            let ghosts = w[0]..w[1];
+            p.copy_positions(n + ghosts.start, &self.sources[ghosts.clone()]);
+            mirror_positions(&mut p.x[n + ghosts.start..n + ghosts.end], plane);
+        }
+    }
 }
 
 /// Put back real particles that crossed a plane: each is replaced by its mirror image (the
@@ -169,7 +181,7 @@ pub fn rebuild_ghosts<const D: usize>(p: &mut Particles<D>, planes: &[Plane]) {
 /// their mirror bodies.
 fn mirror<const D: usize>(p: &mut Particles<D>, range: Range<usize>, plane: &Plane) {
     const MIN: usize = 256;
-    let (k, c) = (plane.axis, plane.position);
+    let k = plane.axis;
     let r = range;
     if let Some(bodies) = plane.wall {
         for b in &mut p.body[r.clone()] {
@@ -182,7 +194,7 @@ fn mirror<const D: usize>(p: &mut Particles<D>, range: Range<usize>, plane: &Pla
     fn each<T: Send>(field: &mut [T], f: impl Fn(&mut T) + Sync + Send) {
         field.par_iter_mut().with_min_len(MIN).for_each(f);
     }
-    each(&mut p.x[r.clone()], |x| x[k] = 2.0 * c - x[k]);
+    mirror_positions(&mut p.x[r.clone()], plane);
     for field in [&mut p.v, &mut p.vh, &mut p.a, &mut p.contact_force] {
         each(&mut field[r.clone()], |v| v[k] = -v[k]);
     }
@@ -191,6 +203,14 @@ fn mirror<const D: usize>(p: &mut Particles<D>, range: Range<usize>, plane: &Pla
     }
     each(&mut p.s[r.clone()], |s| s.mirror(k));
     each(&mut p.strain_rate[r], |s| s.mirror(k));
+}
+
+/// Mirror positions `x` in the plane (in parallel).
+fn mirror_positions<const D: usize>(x: &mut [crate::particles::Vector<D>], plane: &Plane) {
+    let (k, c) = (plane.axis, plane.position);
+    x.par_iter_mut()
+        .with_min_len(256)
+        .for_each(|x| x[k] = 2.0 * c - x[k]);
 }
 
 #[cfg(test)]
@@ -251,6 +271,17 @@ mod tests {
         assert_eq!(p.len(), 4);
         assert_eq!(p.x[3], Vector::<3>::new(-0.1, -0.2, 6.0));
         assert_eq!(p.rho[3], 2.0);
+        // Positions only (under MPI, before the halo): the ghosts' places and smoothing
+        // lengths move with their sources, through both planes; the rest waits.
+        p.x[0] = Vector::<3>::new(0.3, 0.4, 7.0);
+        p.h[0] = 0.7;
+        p.rho[0] = 3.0;
+        ghosts.update_positions(&mut p, &planes);
+        assert_eq!(p.x[1], Vector::<3>::new(-0.3, 0.4, 7.0));
+        assert_eq!(p.x[2], Vector::<3>::new(0.3, -0.4, 7.0));
+        assert_eq!(p.x[3], Vector::<3>::new(-0.3, -0.4, 7.0));
+        assert!(p.h[1..].iter().all(|&h| h == 0.7));
+        assert!(p.rho[1..].iter().all(|&r| r == 2.0));
     }
 
     #[test]

@@ -40,7 +40,8 @@
 //! neighbours; if every displacement in that neighbourhood is within s − 2δ of every
 //! displacement in i's block (boxes of displacements per block), i's list is still complete.
 //! Only the particles of the other blocks get new lists, from the current positions and with
-//! no skin, at every step until the next full build ("dirty").
+//! no skin, at every step until the next full build ("dirty"), and only the particles of the
+//! dirty blocks and their neighbours are binned to find them.
 
 use crate::particles::Vector;
 use rayon::prelude::*;
@@ -72,8 +73,8 @@ pub struct NeighborList {
     cell_key: Vec<u64>,
     /// Next free slot of each cell during the counting sort.
     fill: Vec<u32>,
-    /// Cell coordinates of each particle (i32 is plenty: a grid has at most 2^KEY_BITS cells an
-    /// axis), and (sparse) key-index pairs for sorting.
+    /// Cell coordinates of the binned particles, in the order binned (i32 is plenty: a grid
+    /// has at most 2^KEY_BITS cells an axis), and (sparse) key-index pairs for sorting.
     coords: Vec<[i32; 3]>,
     keyed: Vec<(u64, u32)>,
     /// Positions (from the grid's corner, single precision: see [`rounding`]) and support
@@ -104,6 +105,8 @@ pub struct NeighborList {
     /// Dirty particles now, and lists rebuilt by partial rebuilds since the full build.
     dirty_count: usize,
     rebuilt: usize,
+    /// The particles a partial rebuild bins (see [`NeighborList::rebuild_dirty`]).
+    candidates: Vec<u32>,
     /// Per real particle: whether its list holds a particle of another class (body), as of the
     /// last [`NeighborList::classify`].
     pub mixed: Vec<bool>,
@@ -355,7 +358,7 @@ impl NeighborList {
         if x.is_empty() {
             self.sorted.clear();
         } else {
-            self.bin(x, h, 0.0);
+            self.bin(x, h, 0.0, None);
         }
         &self.sorted
     }
@@ -487,13 +490,57 @@ impl NeighborList {
 
     /// Rebuild the lists of the dirty particles from the current positions, with no skin
     /// (they are rebuilt again at the next step).
+    ///
+    /// Only the candidates are binned: the members of the dirty blocks whose lists are built
+    /// here and of the blocks around them. That is all a dirty particle's neighbours can be,
+    /// because `refresh` asks for a full build once 2 h_max + 2 d_max could pass a block's
+    /// width (see the module doc); binning every particle, as a full build does, made most of
+    /// a partial rebuild's cost where few blocks are dirty (a projectile's path through a
+    /// large target). The lists are the same either way but for pairs within the rounding of
+    /// the single-precision positions, which the lists' users drop.
     pub fn rebuild_dirty<const D: usize>(&mut self, x: &[Vector<D>], h: &[f64]) {
         if self.dirty_count == 0 {
             return;
         }
         self.rebuilt += self.dirty_count;
-        let grid = self.bin(x, h, 0.0);
-        self.scan(x, h, 0.0, grid, true);
+        let mut candidates = std::mem::take(&mut self.candidates);
+        self.near_dirty(&mut candidates);
+        if !candidates.is_empty() {
+            let grid = self.bin(x, h, 0.0, Some(&candidates));
+            self.scan(x, h, 0.0, grid, true);
+        }
+        self.candidates = candidates;
+    }
+
+    /// The members of the blocks within one block of a dirty block that holds a dirty
+    /// particle whose list is built here, in block order.
+    fn near_dirty(&self, out: &mut Vec<u32>) {
+        out.clear();
+        let (dims, starts, members) = (self.block_dims, &self.block_start, &self.block_members);
+        let mut near = vec![false; self.dirty_block.len()];
+        for (b, _) in self.dirty_block.iter().enumerate().filter(|(_, &d)| d) {
+            let here = members[starts[b] as usize..starts[b + 1] as usize]
+                .iter()
+                .any(|&i| self.listed(i as usize) && self.dirty[i as usize]);
+            if !here {
+                continue;
+            }
+            let c = [
+                b / (dims[1] * dims[2]),
+                (b / dims[2]) % dims[1],
+                b % dims[2],
+            ];
+            for n0 in c[0].saturating_sub(1)..(c[0] + 2).min(dims[0]) {
+                for n1 in c[1].saturating_sub(1)..(c[1] + 2).min(dims[1]) {
+                    for n2 in c[2].saturating_sub(1)..(c[2] + 2).min(dims[2]) {
+                        near[(n0 * dims[1] + n1) * dims[2] + n2] = true;
+                    }
+                }
+            }
+        }
+        for (b, _) in near.iter().enumerate().filter(|(_, &n)| n) {
+            out.extend_from_slice(&members[starts[b] as usize..starts[b + 1] as usize]);
+        }
     }
 
     /// Rebuild for positions `x` (real then ghosts) and smoothing lengths `h`, with the support
@@ -515,7 +562,7 @@ impl NeighborList {
             self.sorted.clear();
             return;
         }
-        let grid = self.bin(x, h, skin);
+        let grid = self.bin(x, h, skin, None);
         // The positions and smoothing lengths of this build, from the grid's corner, in single
         // precision, and the slack their rounding asks of the skin (see `refresh`).
         let lo = grid.lo;
@@ -590,7 +637,6 @@ impl NeighborList {
         let sorted = &self.sorted;
         let cell_start = &self.cell_start;
         let cell_key = &self.cell_key;
-        let coords = &self.coords;
         let last = D - 1;
         let dirty = &self.dirty;
         let n_lists = self.n_lists;
@@ -599,7 +645,7 @@ impl NeighborList {
         let search = |i: usize, list: &mut Vec<u32>| {
             let xi = x[i];
             let hi = h[i] + 0.5 * skin;
-            let c = coords[i].map(i64::from);
+            let c = grid.coords(&xi);
             // Runs along the last axis for every offset of the other axes.
             let lo_last = (c[last] - REACH).max(0);
             let hi_last = (c[last] + REACH).min(grid.dims[last] - 1);
@@ -710,14 +756,22 @@ impl NeighborList {
         );
     }
 
-    /// Sort the particles into cells; fills `sorted`, `cell_start` (and `cell_key` when sparse)
-    /// and `coords`.
-    fn bin<const D: usize>(&mut self, x: &[Vector<D>], h: &[f64], skin: f64) -> Grid<D> {
-        let n = x.len();
-        let h_max = h.iter().copied().fold(0.0_f64, f64::max) + 0.5 * skin;
+    /// Sort the particles (or `only` these) into cells; fills `sorted`, `cell_start` (and
+    /// `cell_key` when sparse) and `coords` (the binned particles', in the order binned).
+    fn bin<const D: usize>(
+        &mut self,
+        x: &[Vector<D>],
+        h: &[f64],
+        skin: f64,
+        only: Option<&[u32]>,
+    ) -> Grid<D> {
+        let n = only.map_or(x.len(), <[u32]>::len);
+        let id = |k: usize| only.map_or(k, |s| s[k] as usize);
+        let h_max = (0..n).map(|k| h[id(k)]).fold(0.0_f64, f64::max) + 0.5 * skin;
         let mut lo = Vector::<D>::repeat(f64::INFINITY);
         let mut hi = Vector::<D>::repeat(f64::NEG_INFINITY);
-        for p in x {
+        for k in 0..n {
+            let p = &x[id(k)];
             lo = lo.inf(p);
             hi = hi.sup(p);
         }
@@ -738,8 +792,11 @@ impl NeighborList {
             dense,
         };
         self.coords.clear();
-        self.coords
-            .par_extend(x.par_iter().map(|p| grid.coords(p).map(|c| c as i32)));
+        self.coords.par_extend(
+            (0..n)
+                .into_par_iter()
+                .map(|k| grid.coords(&x[id(k)]).map(|c| c as i32)),
+        );
         self.sorted.clear();
         self.cell_start.clear();
         self.cell_key.clear();
@@ -752,13 +809,18 @@ impl NeighborList {
                 &mut self.sorted,
                 &mut self.fill,
             );
+            if let Some(only) = only {
+                for k in self.sorted.iter_mut() {
+                    *k = only[*k as usize];
+                }
+            }
         } else {
             self.keyed.clear();
             let coords = &self.coords;
             self.keyed.par_extend(
                 (0..n)
                     .into_par_iter()
-                    .map(|i| (grid.key(coords[i].map(i64::from)), i as u32)),
+                    .map(|k| (grid.key(coords[k].map(i64::from)), id(k) as u32)),
             );
             self.keyed.par_sort_unstable();
             for (k, &(key, i)) in self.keyed.iter().enumerate() {

@@ -210,18 +210,16 @@ impl<const D: usize> Particles<D> {
     /// Copy particle `sources[k]` onto particle `first + k` for every k, in parallel; every
     /// source must lie below `first`.
     pub fn copy_many(&mut self, first: usize, sources: &[usize]) {
-        fn apply<T: Copy + Send + Sync>(v: &mut [T], first: usize, sources: &[usize]) {
-            let (from, to) = v.split_at_mut(first);
-            to[..sources.len()]
-                .par_iter_mut()
-                .zip(sources)
-                .with_min_len(256)
-                .for_each(|(d, &s)| *d = from[s]);
-        }
         macro_rules! copy_many {
-            ($($f:ident),*) => { $(apply(&mut self.$f, first, sources);)* };
+            ($($f:ident),*) => { $(copy_onto(&mut self.$f, first, sources);)* };
         }
         for_each_field!(copy_many);
+    }
+
+    /// [`Particles::copy_many`] of the positions and smoothing lengths only.
+    pub fn copy_positions(&mut self, first: usize, sources: &[usize]) {
+        copy_onto(&mut self.x, first, sources);
+        copy_onto(&mut self.h, first, sources);
     }
 
     /// Reorder real particles by `order` (new position k holds old particle `order[k]`).
@@ -326,6 +324,16 @@ pub fn estimated_bytes_per_particle(dimension: usize, corrected: bool) -> usize 
         (_, false) => 810,
         (_, true) => 1160,
     }
+}
+
+/// `v[first + k] = v[sources[k]]` for every k, in parallel (every source below `first`).
+fn copy_onto<T: Copy + Send + Sync>(v: &mut [T], first: usize, sources: &[usize]) {
+    let (from, to) = v.split_at_mut(first);
+    to[..sources.len()]
+        .par_iter_mut()
+        .zip(sources)
+        .with_min_len(256)
+        .for_each(|(d, &s)| *d = from[s]);
 }
 
 #[cfg(test)]

@@ -456,7 +456,9 @@ mod exchange {
         // Never an empty vector's dangling pointer: for one-byte records it is 0x1, which
         // OpenMPI reads as MPI_IN_PLACE (and refuses, MPI_ERR_ARG).
         let mut flat: Vec<T> = Vec::with_capacity(out.iter().map(Vec::len).sum::<usize>().max(1));
-        flat.extend(out.iter().flatten().copied());
+        for o in out {
+            flat.extend_from_slice(o);
+        }
         let total: usize = recv_counts.iter().map(|&c| c as usize).sum();
         let mut got: Vec<T> = Vec::with_capacity(total.max(1));
         // SAFETY: the send buffer holds the records the counts say; the receive buffer has

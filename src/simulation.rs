@@ -550,8 +550,15 @@ impl<const D: usize> Simulation<D> {
         integrate::predict_velocity(p, &self.model, self.state.dt_prev);
         // Ghosts and neighbour lists are rebuilt when the skin is used up (positions are those
         // of the real particles with the old ghosts refreshed), and every REORDER_EVERY steps
-        // at the latest, when the real particles are also put back in cell order.
-        self.ghosts.update(p, &self.symmetry);
+        // at the latest, when the real particles are also put back in cell order. Ranks that
+        // advance a range each need only the ghosts' positions here: their state comes whole
+        // after the halo (`receive_halo`), or with a full search's rebuild.
+        let distributed = self.ranks.size() > 1 && self.parts.len() == self.ranks.size();
+        if distributed {
+            self.ghosts.update_positions(p, &self.symmetry);
+        } else {
+            self.ghosts.update(p, &self.symmetry);
+        }
         let wide = self.model.colour.is_some();
         let reorder = self.state.step >= self.state.last_reorder + REORDER_EVERY;
         let mut need = Refresh::Full;
@@ -573,7 +580,6 @@ impl<const D: usize> Simulation<D> {
                 self.busy += start.elapsed().as_secs_f64();
             }
         }
-        let distributed = self.ranks.size() > 1 && self.parts.len() == self.ranks.size();
         if need == Refresh::Full && distributed {
             // Each rank has advanced only its own range since the ranges were set: before they
             // change (and the order with them), every rank takes every particle's state, and
