@@ -354,11 +354,17 @@ impl<const D: usize> Simulation<D> {
     /// it writes what holds all of them (a checkpoint, a cross-section). Nothing on one rank
     /// or before the first step.
     pub fn gather(&mut self) {
-        if self.ranks.size() > 1 && self.parts.len() == self.ranks.size() {
+        if self.distributed() {
             let lap = Instant::now();
             self.particles.share_real(self.ranks, &self.parts);
             self.exchanging += lap.elapsed().as_secs_f64();
         }
+    }
+
+    /// Whether the ranks each advance a range of their own (MPI, once the first step has set
+    /// the ranges).
+    fn distributed(&self) -> bool {
+        self.ranks.size() > 1 && self.parts.len() == self.ranks.size()
     }
 
     /// Whether the ranks' loads have drifted apart since their ranges were set: every
@@ -424,17 +430,16 @@ impl<const D: usize> Simulation<D> {
             // A partial rebuild changes only the rebuilt lists: their particles join the full
             // build's halo (a few too many until the next full build cost nothing).
             let owned = &self.parts[self.ranks.rank()];
-            let needed = if need == Refresh::Full {
+            if need == Refresh::Full {
                 self.halo = self.needed(owned, false);
-                self.halo.clone()
+                self.plan = self.ranks.plan(&self.parts, &self.halo);
             } else {
                 let mut needed = self.needed(owned, true);
                 needed.extend_from_slice(&self.halo);
                 needed.par_sort_unstable();
                 needed.dedup();
-                needed
-            };
-            self.plan = self.ranks.plan(&self.parts, &needed);
+                self.plan = self.ranks.plan(&self.parts, &needed);
+            }
         }
         if need == Refresh::Full {
             return;
@@ -546,6 +551,7 @@ impl<const D: usize> Simulation<D> {
 
     fn advance(&mut self, dt_max: f64) -> Result<Diagnostics> {
         let unbalanced = self.unbalanced();
+        let distributed = self.distributed();
         let p = &mut self.particles;
         integrate::predict_velocity(p, &self.model, self.state.dt_prev);
         // Ghosts and neighbour lists are rebuilt when the skin is used up (positions are those
@@ -553,7 +559,6 @@ impl<const D: usize> Simulation<D> {
         // at the latest, when the real particles are also put back in cell order. Ranks that
         // advance a range each need only the ghosts' positions here: their state comes whole
         // after the halo (`receive_halo`), or with a full search's rebuild.
-        let distributed = self.ranks.size() > 1 && self.parts.len() == self.ranks.size();
         if distributed {
             self.ghosts.update_positions(p, &self.symmetry);
         } else {
@@ -881,11 +886,9 @@ impl<const D: usize> Simulation<D> {
         let n = self.particles.n_real;
         let parts = self.rank_ranges();
         let mut bad = self.first_bad(parts[self.ranks.rank()].clone(), dt);
-        let step_fails = !(dt.is_finite() && dt > 0.0)
-            || self.state.time + dt == self.state.time
-            || dt_stable < 1e-6 * dt_first
-            || dt_stable.is_nan();
-        if self.ranks.size() > 1 && (self.ranks.any(bad.is_some()) || step_fails) {
+        let stalled = !(dt.is_finite() && dt > 0.0) || self.state.time + dt == self.state.time;
+        let collapsed = dt_stable < 1e-6 * dt_first || dt_stable.is_nan();
+        if self.ranks.size() > 1 && (self.ranks.any(bad.is_some()) || stalled || collapsed) {
             self.particles.share_real(self.ranks, &parts);
             self.ranks.share(&mut self.rates.particles[..n], &parts);
             bad = self.first_bad(0..n, dt);
@@ -894,7 +897,7 @@ impl<const D: usize> Simulation<D> {
         let r = &self.rates.particles;
         let (i, cause) = match bad {
             Some(b) => b,
-            None if !(dt.is_finite() && dt > 0.0) || self.state.time + dt == self.state.time => {
+            None if stalled => {
                 let i = (0..p.n_real)
                     .min_by(|&a, &b| r[a].dt.total_cmp(&r[b].dt))
                     .unwrap_or(0);
@@ -906,7 +909,7 @@ impl<const D: usize> Simulation<D> {
                     ),
                 )
             }
-            None if dt_stable < 1e-6 * dt_first || dt_stable.is_nan() => {
+            None if collapsed => {
                 let i = (0..p.n_real)
                     .min_by(|&a, &b| r[a].dt.total_cmp(&r[b].dt))
                     .unwrap_or(0);
