@@ -82,15 +82,30 @@ impl Ghosts {
     }
 
     /// Whether the ghosts still cover every particle within `reach` of a plane (each particle
-    /// without a ghost in a plane is still farther from it). Positions must be up to date
-    /// ([`Ghosts::update`]).
-    pub fn cover<const D: usize>(&self, p: &Particles<D>, planes: &[Plane], reach: f64) -> bool {
+    /// without a ghost in a plane is still farther from it), of those `mine` (an MPI rank's own
+    /// particles and the ghosts that mirror them, by index: see [`Ghosts::real_source`]).
+    /// Their positions must be up to date ([`Ghosts::update`]).
+    pub fn cover<const D: usize>(
+        &self,
+        p: &Particles<D>,
+        planes: &[Plane],
+        reach: f64,
+        mine: impl Fn(usize) -> bool + Sync,
+    ) -> bool {
         planes.iter().zip(&self.mirrored).all(|(plane, mirrored)| {
             mirrored
                 .par_iter()
                 .enumerate()
-                .all(|(i, &m)| m || plane.depth(p.x[i][plane.axis]) >= reach)
+                .all(|(i, &m)| m || !mine(i) || plane.depth(p.x[i][plane.axis]) >= reach)
         })
+    }
+
+    /// The ghosts whose real source lies in `owned` (an MPI rank's own range), ascending.
+    pub fn mirroring(&self, owned: &Range<usize>, n_real: usize) -> Vec<u32> {
+        (0..self.sources.len())
+            .filter(|&k| owned.contains(&self.real_source(n_real + k, n_real)))
+            .map(|k| (n_real + k) as u32)
+            .collect()
     }
 
     /// Extend per-particle `values` of the real particles to the ghosts, in ghost order: each
@@ -150,15 +165,19 @@ impl Ghosts {
 /// meet ghosts of particles beyond the ghost layer's reach, which breaks the pairwise balance
 /// of forces along the plane (seen as a drift of the momentum parallel to it in the 7 km/s
 /// quarter model). |v| and the components along the plane are kept, so energy and the
-/// conserved momentum are too.
-pub fn reflect_crossed<const D: usize>(p: &mut Particles<D>, planes: &[Plane]) {
+/// conserved momentum are too. Only the particles of `range` (an MPI rank's own) are looked at.
+pub fn reflect_crossed<const D: usize>(
+    p: &mut Particles<D>,
+    planes: &[Plane],
+    range: Range<usize>,
+) {
     for plane in planes {
         let crossed = |i: usize| plane.depth(p.x[i][plane.axis]) < 0.0;
         // Rare: look in parallel, put back one by one.
-        if !(0..p.n_real).into_par_iter().any(crossed) {
+        if !range.clone().into_par_iter().any(crossed) {
             continue;
         }
-        for i in 0..p.n_real {
+        for i in range.clone() {
             if plane.depth(p.x[i][plane.axis]) < 0.0 {
                 // Its own image: the body stays.
                 let own = Plane {
@@ -310,7 +329,7 @@ mod tests {
             side: 1.0,
             wall: None,
         }];
-        reflect_crossed(&mut p, &planes);
+        reflect_crossed(&mut p, &planes, 0..2);
         assert_eq!(p.x[0], Vector::<2>::new(0.1, 1.0));
         assert_eq!(p.vh[0], Vector::<2>::new(2.0, 3.0));
         assert_eq!(p.s[0].full(), Tensor::<2>::new(1.0, -2.0, -2.0, -1.0));

@@ -44,6 +44,7 @@
 //! dirty blocks and their neighbours are binned to find them.
 
 use crate::particles::Vector;
+use crate::ranks::Ranks;
 use rayon::prelude::*;
 
 /// Cells reach this many cells either side (cell size h_max, support ≤ 2 h_max).
@@ -113,6 +114,19 @@ pub struct NeighborList {
     /// The real particles whose lists are built (an MPI rank's share, see `ranks`; None: all),
     /// widened to whole chunks. The others' lists are empty.
     owned: Option<std::ops::Range<usize>>,
+    /// Under MPI, where other ranks' particles are not all up to date (see
+    /// [`NeighborList::refresh`]): the ghosts that mirror this rank's own particles
+    /// ([`NeighborList::own_ghosts`]), and per block of the last full build whether it holds
+    /// one of this rank's particles (`home`) or lies within one block of such a block (`near`).
+    /// Empty on one process: every block is both.
+    owned_ghosts: Vec<u32>,
+    home: Vec<bool>,
+    near: Vec<bool>,
+    /// Dirty particles among those whose lists are built here (all of them on one process);
+    /// `dirty_count` is their sum over the ranks.
+    dirty_here: usize,
+    /// The largest search radius at the last refresh, over every particle of every rank.
+    h_max: f64,
 }
 
 /// Particles per chunk of lists (a power of two).
@@ -332,6 +346,34 @@ impl NeighborList {
         self.owned = Some(owned);
     }
 
+    /// The ghosts that mirror this rank's own particles (ascending), after a full build under
+    /// MPI: with the rank's own real particles, they are the particles whose displacements it
+    /// measures in [`NeighborList::refresh`].
+    pub fn own_ghosts(&mut self, ghosts: Vec<u32>) {
+        self.owned_ghosts = ghosts;
+    }
+
+    /// Under MPI, the particles (real and ghost, by block) whose current positions and
+    /// smoothing lengths [`NeighborList::refresh`] and [`NeighborList::rebuild_dirty`] read:
+    /// the members of the blocks within one block of a block holding one of this rank's own
+    /// particles. None where the last full build made no blocks (a sparse grid: then the
+    /// refresh reads only this rank's own particles and their ghosts), or on one process.
+    pub fn near_members(&self) -> impl Iterator<Item = u32> + '_ {
+        let (starts, members) = (&self.block_start, &self.block_members);
+        self.near
+            .iter()
+            .enumerate()
+            .filter(|(_, &n)| n)
+            .flat_map(move |(b, _)| &members[starts[b] as usize..starts[b + 1] as usize])
+            .copied()
+    }
+
+    /// The largest search radius at the last [`NeighborList::refresh`] that measured one,
+    /// over every rank's particles.
+    pub fn h_max(&self) -> f64 {
+        self.h_max
+    }
+
     /// Whether real particle `i`'s list was rebuilt since the last full build (a partial
     /// rebuild's "dirty" list: [`Refresh::Partial`]); the others are those of that build.
     pub fn rebuilt_since_build(&self, i: usize) -> bool {
@@ -366,7 +408,15 @@ impl NeighborList {
     /// What the lists need for these positions and smoothing lengths (the particles, real
     /// and ghost, must be those of the last full build, in the same order). Marks the dirty
     /// blocks and particles when the answer is `Partial`.
-    pub fn refresh<const D: usize>(&mut self, x: &[Vector<D>], h: &[f64]) -> Refresh {
+    ///
+    /// **Under MPI** (`ranks`, after [`NeighborList::own`]) only some positions are current: a
+    /// rank's own particles and the ghosts that mirror them, and the members of its `near`
+    /// blocks, whose positions their owners send after each step. Each rank measures the
+    /// displacements of its own particles and ghosts, and the ranks take the largest (exact in
+    /// any order); each rank boxes the displacements of its near blocks and marks which of its
+    /// home blocks are dirty, and the ranks add their counts of dirty particles. Every rank
+    /// then gives the answer one process would, and reads no position it does not have.
+    pub fn refresh<const D: usize>(&mut self, x: &[Vector<D>], h: &[f64], ranks: Ranks) -> Refresh {
         if self.h_built.len() != h.len() || self.x_built.len() != D * x.len() {
             return Refresh::Full;
         }
@@ -378,20 +428,29 @@ impl NeighborList {
             }
             d
         };
-        let (d2, dh, h_max) = (0..x.len())
-            .into_par_iter()
-            .map(|i| {
-                let d = disp(i);
-                (
-                    d[0] * d[0] + d[1] * d[1] + d[2] * d[2],
-                    h[i] - f64::from(self.h_built[i]),
-                    h[i],
-                )
-            })
-            .reduce(
-                || (0.0, 0.0, 0.0),
-                |a, b| (a.0.max(b.0), a.1.max(b.1), a.2.max(b.2)),
-            );
+        let measure = |i: usize| {
+            let d = disp(i);
+            [
+                d[0] * d[0] + d[1] * d[1] + d[2] * d[2],
+                h[i] - f64::from(self.h_built[i]),
+                h[i],
+            ]
+        };
+        let most = |a: [f64; 3], b: [f64; 3]| [a[0].max(b[0]), a[1].max(b[1]), a[2].max(b[2])];
+        let mut m = match &self.owned {
+            None => (0..x.len())
+                .into_par_iter()
+                .map(measure)
+                .reduce(|| [0.0; 3], most),
+            Some(own) => (own.start.min(self.n_lists)..own.end.min(self.n_lists))
+                .into_par_iter()
+                .map(measure)
+                .chain(self.owned_ghosts.par_iter().map(|&g| measure(g as usize)))
+                .reduce(|| [0.0; 3], most),
+        };
+        ranks.max_each(&mut m);
+        let [d2, dh, h_max] = m;
+        self.h_max = h_max;
         // The stored positions and smoothing lengths are rounded: every displacement may be
         // longer than it reads by up to √D·e and every growth larger by e_h, so the tests below
         // take `slack` = 2 √D e + 2 e_h out of the skin (see [`rounding`]).
@@ -404,9 +463,11 @@ impl NeighborList {
         }
         // Displacement box of each block.
         let (starts, members) = (&self.block_start, &self.block_members);
+        let near = &self.near;
         self.block_box
             .par_iter_mut()
             .enumerate()
+            .filter(|(b, _)| near.get(*b).is_none_or(|&n| n))
             .for_each(|(b, bx)| {
                 *bx = [[f64::INFINITY; 3], [f64::NEG_INFINITY; 3]];
                 for &i in &members[starts[b] as usize..starts[b + 1] as usize] {
@@ -420,30 +481,22 @@ impl NeighborList {
         // A block stays clean while the farthest pair of displacements between it and its
         // neighbourhood is below s − 2δ.
         let (dims, boxes, skin) = (self.block_dims, &self.block_box, self.skin);
+        let home = &self.home;
         self.dirty_block
             .par_iter_mut()
             .enumerate()
             .for_each(|(b, dirty)| {
-                if *dirty || starts[b] == starts[b + 1] {
+                if *dirty || starts[b] == starts[b + 1] || home.get(b).is_some_and(|&h| !h) {
                     return;
                 }
-                let c = [
-                    b / (dims[1] * dims[2]),
-                    (b / dims[2]) % dims[1],
-                    b % dims[2],
-                ];
                 let mut union = boxes[b];
-                for n0 in c[0].saturating_sub(1)..(c[0] + 2).min(dims[0]) {
-                    for n1 in c[1].saturating_sub(1)..(c[1] + 2).min(dims[1]) {
-                        for n2 in c[2].saturating_sub(1)..(c[2] + 2).min(dims[2]) {
-                            let o = &boxes[(n0 * dims[1] + n1) * dims[2] + n2];
-                            for k in 0..3 {
-                                union[0][k] = union[0][k].min(o[0][k]);
-                                union[1][k] = union[1][k].max(o[1][k]);
-                            }
-                        }
+                around(dims, b, |o| {
+                    let o = &boxes[o];
+                    for k in 0..3 {
+                        union[0][k] = union[0][k].min(o[0][k]);
+                        union[1][k] = union[1][k].max(o[1][k]);
                     }
-                }
+                });
                 let own = &boxes[b];
                 let mut far2 = 0.0;
                 for k in 0..3 {
@@ -452,18 +505,18 @@ impl NeighborList {
                 }
                 *dirty = far2.sqrt() + grow + slack >= skin;
             });
-        let dirty_block = &self.dirty_block;
         let n_real = self.n_lists;
         let (starts, members) = (&self.block_start, &self.block_members);
-        for (b, _) in dirty_block.iter().enumerate().filter(|(_, &d)| d) {
+        for (b, _) in self.dirty_block.iter().enumerate().filter(|(_, &d)| d) {
             for &i in &members[starts[b] as usize..starts[b + 1] as usize] {
                 let i = i as usize;
-                if i < n_real && !self.dirty[i] {
+                if i < n_real && !self.dirty[i] && self.listed(i) {
                     self.dirty[i] = true;
-                    self.dirty_count += 1;
+                    self.dirty_here += 1;
                 }
             }
         }
+        self.dirty_count = ranks.sum(self.dirty_here as u64) as usize;
         // Once the partial rebuilds have cost as much as a full build, a full build is cheaper
         // (a slow flow, which then keeps its lists for many steps).
         if self.rebuilt + self.dirty_count >= n_real {
@@ -525,18 +578,7 @@ impl NeighborList {
             if !here {
                 continue;
             }
-            let c = [
-                b / (dims[1] * dims[2]),
-                (b / dims[2]) % dims[1],
-                b % dims[2],
-            ];
-            for n0 in c[0].saturating_sub(1)..(c[0] + 2).min(dims[0]) {
-                for n1 in c[1].saturating_sub(1)..(c[1] + 2).min(dims[1]) {
-                    for n2 in c[2].saturating_sub(1)..(c[2] + 2).min(dims[2]) {
-                        near[(n0 * dims[1] + n1) * dims[2] + n2] = true;
-                    }
-                }
-            }
+            around(dims, b, |o| near[o] = true);
         }
         for (b, _) in near.iter().enumerate().filter(|(_, &n)| n) {
             out.extend_from_slice(&members[starts[b] as usize..starts[b + 1] as usize]);
@@ -556,8 +598,11 @@ impl NeighborList {
         self.dirty.clear();
         self.dirty.resize(n_real, false);
         self.dirty_count = 0;
+        self.dirty_here = 0;
         self.rebuilt = 0;
         self.block_start.clear();
+        self.home.clear();
+        self.near.clear();
         if n == 0 {
             self.sorted.clear();
             return;
@@ -605,6 +650,29 @@ impl NeighborList {
         self.block_box.resize(count, [[0.0; 3]; 2]);
         self.dirty_block.clear();
         self.dirty_block.resize(count, false);
+        if self.owned.is_some() {
+            self.mark_home();
+        }
+    }
+
+    /// Under MPI: the blocks that hold a particle whose list is built here (`home`), and
+    /// those within one block of one (`near`).
+    fn mark_home(&mut self) {
+        let (dims, starts, members) = (self.block_dims, &self.block_start, &self.block_members);
+        let count = starts.len() - 1;
+        let home: Vec<bool> = (0..count)
+            .map(|b| {
+                members[starts[b] as usize..starts[b + 1] as usize]
+                    .iter()
+                    .any(|&i| self.listed(i as usize))
+            })
+            .collect();
+        self.home = home;
+        self.near.clear();
+        self.near.resize(count, false);
+        for (b, _) in self.home.iter().enumerate().filter(|(_, &h)| h) {
+            around(dims, b, |o| self.near[o] = true);
+        }
     }
 
     /// Fill the lists (of the dirty real particles only, if `dirty_only`) from the binned
@@ -836,6 +904,23 @@ impl NeighborList {
     }
 }
 
+/// Calls `f` with block `b` and each of its 3^D − 1 neighbours within the blocks' `dims`
+/// (the last axis fastest).
+fn around(dims: [usize; 3], b: usize, mut f: impl FnMut(usize)) {
+    let c = [
+        b / (dims[1] * dims[2]),
+        (b / dims[2]) % dims[1],
+        b % dims[2],
+    ];
+    for n0 in c[0].saturating_sub(1)..(c[0] + 2).min(dims[0]) {
+        for n1 in c[1].saturating_sub(1)..(c[1] + 2).min(dims[1]) {
+            for n2 in c[2].saturating_sub(1)..(c[2] + 2).min(dims[2]) {
+                f((n0 * dims[1] + n1) * dims[2] + n2);
+            }
+        }
+    }
+}
+
 /// A bound on the error of a length of at most `magnitude` kept in single precision (round to
 /// nearest: half an ulp, 2⁻²⁴ of it), doubled for the double-precision arithmetic around it.
 /// Positions are kept from a corner of their box, so the bound follows the box's size, not
@@ -966,7 +1051,7 @@ mod tests {
         let mut nl = NeighborList::default();
         nl.build(&x, &h, 400, 0.02);
         let mut moves = 0;
-        while nl.refresh(&x, &h) == Refresh::Valid {
+        while nl.refresh(&x, &h, Ranks::SERIAL) == Refresh::Valid {
             let exact = brute(&x, &h, 400);
             for (i, e) in exact.iter().enumerate() {
                 assert!(
@@ -1021,7 +1106,7 @@ mod tests {
                     p[0] -= 0.004;
                 }
             }
-            match nl.refresh(&x, &h) {
+            match nl.refresh(&x, &h, Ranks::SERIAL) {
                 Refresh::Full => {
                     nl.build(&x, &h, n, skin);
                     full += 1;

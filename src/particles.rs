@@ -254,6 +254,29 @@ impl<const D: usize> Particles<D> {
         debug_assert!(from.is_empty(), "{} bytes left over", from.len());
     }
 
+    /// [`Particles::pack`] of the positions and smoothing lengths only: what another rank's
+    /// neighbour refresh reads of the particles near its own (`Simulation`'s position plan).
+    pub fn pack_positions(&self, idx: &[u32], out: &mut Vec<u8>) {
+        for &i in idx {
+            out.extend_from_slice(bytes_of(&self.x[i as usize]));
+        }
+        for &i in idx {
+            out.extend_from_slice(bytes_of(&self.h[i as usize]));
+        }
+    }
+
+    /// Set the positions and smoothing lengths of particles `idx` from a message of
+    /// [`Particles::pack_positions`] for them.
+    pub fn unpack_positions(&mut self, idx: &[u32], mut from: &[u8]) {
+        for &i in idx {
+            from = read_into(&mut self.x[i as usize], from);
+        }
+        for &i in idx {
+            from = read_into(&mut self.h[i as usize], from);
+        }
+        debug_assert!(from.is_empty(), "{} bytes left over", from.len());
+    }
+
     /// After each rank has advanced its own range `parts[rank]` of the real particles, give
     /// every rank all of them (each field all-gathered; nothing to do on one rank).
     pub fn share_real(&mut self, ranks: crate::ranks::Ranks, parts: &[std::ops::Range<usize>]) {

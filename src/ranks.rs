@@ -11,9 +11,14 @@
 //! - computes CN-SPH's corrections and the colour states of its range and shares them
 //!   (all-gather: the colour states are sparse and short-lived);
 //! - computes the rates of its range and advances it (the rates are not exchanged);
-//! - shares its particles' positions and smoothing lengths (all-gather), which every rank's
-//!   neighbour refresh reads, and its blocks' sums for the history (gathered and added in
-//!   block order);
+//! - sends the positions and smoothing lengths of its particles to the ranks whose neighbour
+//!   refresh reads them (those in the blocks of cells near their own particles, see
+//!   `neighbors::NeighborList::near_members`), point to point over a second plan set at each
+//!   full search, and shares its blocks' sums for the history (gathered and added in block
+//!   order);
+//! - decides with the others whether the lists still hold: the largest displacement and
+//!   smoothing length by an exact reduction, the dirty particles by a sum
+//!   (`neighbors::NeighborList::refresh`);
 //! - takes the smallest time step, the checks and the mixing figures by exact reductions.
 //!
 //! At a full search (at least every `REORDER_EVERY` steps, where the ranges may change) and
@@ -21,9 +26,9 @@
 //! particle's results come from exactly the arithmetic of the serial run whichever rank
 //! computes them, and the sums are added in the serial order, so an MPI run is bit-identical
 //! to the serial one on any number of ranks, and a checkpoint restarts on any number. What it
-//! does not give yet is memory per rank falling with the ranks (each holds the whole store)
-//! or scaling past a few ranks (the positions are all-gathered every step): see the README's
-//! "Not yet".
+//! does not give yet is memory per rank falling with the ranks (each holds the whole store,
+//! most of it stale between full searches) or scaling past a few dozen ranks (the whole state
+//! is all-gathered at each full search): see the README's "Not yet".
 //!
 //! **What a range needs of the others.** The cell order is a raster scan of the cells (the last
 //! axis fastest), so a contiguous range is a slab across the first axis: it touches at most two
@@ -186,6 +191,23 @@ impl Ranks {
             return exchange::all_reduce(value, SystemOperation::min());
         }
         value
+    }
+
+    /// The largest of the ranks' `values`, element by element, on every rank (exact in any
+    /// order; on one rank they stay).
+    pub fn max_each(&self, values: &mut [f64]) {
+        #[cfg(feature = "mpi")]
+        if self.size > 1 {
+            use mpi::collective::SystemOperation;
+            use mpi::traits::*;
+            let mine = values.to_vec();
+            mpi::topology::SimpleCommunicator::world().all_reduce_into(
+                &mine[..],
+                values,
+                SystemOperation::max(),
+            );
+        }
+        let _ = values;
     }
 
     /// The sum of the ranks' `count`s (exact; on one rank: `count`).

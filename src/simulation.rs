@@ -92,6 +92,10 @@ pub struct Simulation<const D: usize> {
     plan: crate::ranks::Plan,
     /// The particles of other ranks that this rank's lists named at the last full build.
     halo: Vec<u32>,
+    /// Which positions (and smoothing lengths) this rank sends and receives after each step:
+    /// those of the particles near its own that the next neighbour refresh reads (see
+    /// `NeighborList::near_members`), set at each full search.
+    positions: crate::ranks::Plan,
     /// Seconds this rank spent on its own share since the ranges were set (to balance the
     /// next ones), and in the exchanges between ranks in all.
     busy: f64,
@@ -325,6 +329,7 @@ impl<const D: usize> Simulation<D> {
             parts: Vec::new(),
             plan: Default::default(),
             halo: Vec::new(),
+            positions: Default::default(),
             busy: 0.0,
             exchanging: 0.0,
             balanced: 0,
@@ -433,6 +438,21 @@ impl<const D: usize> Simulation<D> {
             if need == Refresh::Full {
                 self.halo = self.needed(owned, false);
                 self.plan = self.ranks.plan(&self.parts, &self.halo);
+                // What the refreshes until the next full search read: the displacements of
+                // this rank's own particles and their ghosts, and the positions in the blocks
+                // near them, which come from their owners after each step (`send_positions`).
+                let n = self.particles.n_real;
+                self.neighbors.own_ghosts(self.ghosts.mirroring(owned, n));
+                let mut near: Vec<u32> = self
+                    .neighbors
+                    .near_members()
+                    .map(|j| self.ghosts.real_source(j as usize, n))
+                    .filter(|s| !owned.contains(s))
+                    .map(|s| s as u32)
+                    .collect();
+                near.par_sort_unstable();
+                near.dedup();
+                self.positions = self.ranks.plan(&self.parts, &near);
             } else {
                 let mut needed = self.needed(owned, true);
                 needed.extend_from_slice(&self.halo);
@@ -445,20 +465,24 @@ impl<const D: usize> Simulation<D> {
             return;
         }
         let p = &mut self.particles;
-        let out: Vec<Vec<u8>> = self
-            .plan
-            .send
-            .iter()
-            .map(|idx| {
-                let mut b = Vec::new();
-                p.pack(idx, &mut b);
-                b
-            })
-            .collect();
-        for (idx, bytes) in self.plan.recv.iter().zip(self.ranks.all_to_all(&out)) {
-            p.unpack(idx, &bytes);
-        }
+        swap(
+            self.ranks,
+            &self.plan,
+            p,
+            Particles::pack,
+            Particles::unpack,
+        );
         self.ghosts.update(p, &self.symmetry);
+    }
+
+    /// Under MPI, after a step: the positions and smoothing lengths of this rank's particles
+    /// to the ranks whose next neighbour refresh reads them, and theirs to this rank (the
+    /// position plan of the last full search). The others' stay as they were: no pass reads
+    /// them before the next full search gathers every particle's state.
+    fn send_positions(&mut self) {
+        let p = &mut self.particles;
+        let (pack, unpack) = (Particles::pack_positions, Particles::unpack_positions);
+        swap(self.ranks, &self.positions, p, pack, unpack);
     }
 
     /// The particles of other ranks that this rank's passes read: those that the lists of its
@@ -569,11 +593,20 @@ impl<const D: usize> Simulation<D> {
         let mut need = Refresh::Full;
         if !(reorder || unbalanced) {
             let h = search_radii(p, wide, &mut self.h_search);
-            need = self.neighbors.refresh(&p.x, h);
+            need = self.neighbors.refresh(&p.x, h, self.ranks);
             if need == Refresh::Partial {
-                // Particles moved beyond the skin: the ghost layers must still reach 2 h_max.
-                let h_max = h.par_iter().copied().reduce(|| 0.0, f64::max);
-                if !self.ghosts.cover(p, &self.symmetry, 2.0 * h_max) {
+                // Particles moved beyond the skin: the ghost layers must still reach 2 h_max
+                // (each rank looks at its own particles and their ghosts).
+                let reach = 2.0 * self.neighbors.h_max();
+                let (ghosts, n) = (&self.ghosts, p.n_real);
+                let covered = if distributed {
+                    let own = &self.parts[self.ranks.rank()];
+                    let mine = |i: usize| own.contains(&ghosts.real_source(i, n));
+                    ghosts.cover(p, &self.symmetry, reach, mine)
+                } else {
+                    ghosts.cover(p, &self.symmetry, reach, |_| true)
+                };
+                if self.ranks.any(!covered) {
                     need = Refresh::Full;
                 }
             }
@@ -837,13 +870,12 @@ impl<const D: usize> Simulation<D> {
             (dt, self.state.dt_prev),
             owned.clone(),
         );
-        boundary::reflect_crossed(&mut self.particles, &self.symmetry);
+        boundary::reflect_crossed(&mut self.particles, &self.symmetry, owned.clone());
         if self.ranks.size() > 1 {
-            // Where every particle is, and its reach: what the next step's search reads.
+            // Where the particles near each rank's are, and their reach: what the next step's
+            // search reads.
             let lap = Instant::now();
-            let p = &mut self.particles;
-            self.ranks.share(&mut p.x[..n], &self.parts);
-            self.ranks.share(&mut p.h[..n], &self.parts);
+            self.send_positions();
             self.exchanging += lap.elapsed().as_secs_f64();
         }
 
@@ -1046,6 +1078,30 @@ fn rebalance<const D: usize>(
         start = end;
     }
     parts
+}
+
+/// Send each rank the states of the particles `plan.send` names for it, written by `pack`,
+/// and read what each sends this rank into the particles of `plan.recv` by `unpack` (MPI
+/// all-to-all).
+fn swap<const D: usize>(
+    ranks: Ranks,
+    plan: &crate::ranks::Plan,
+    p: &mut Particles<D>,
+    pack: fn(&Particles<D>, &[u32], &mut Vec<u8>),
+    unpack: fn(&mut Particles<D>, &[u32], &[u8]),
+) {
+    let out: Vec<Vec<u8>> = plan
+        .send
+        .iter()
+        .map(|idx| {
+            let mut b = Vec::new();
+            pack(p, idx, &mut b);
+            b
+        })
+        .collect();
+    for (idx, bytes) in plan.recv.iter().zip(ranks.all_to_all(&out)) {
+        unpack(p, idx, &bytes);
+    }
 }
 
 /// The neighbour search radius of each particle (ghosts included): its smoothing length, or
