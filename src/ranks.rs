@@ -8,8 +8,9 @@
 //! - receives the state of its halo (the other ranks' particles that its own particles' lists
 //!   name, directly or through a symmetry plane's ghost) from their owners, point to point
 //!   ([`Plan`], rebuilt with the lists: [`Ranks::plan`], [`Ranks::all_to_all`]);
-//! - computes CN-SPH's corrections and the colour states of its range and shares them
-//!   (all-gather: the colour states are sparse and short-lived);
+//! - computes CN-SPH's corrections of its range and sends them to the ranks whose halo holds
+//!   them (over the halo's plan), and the colour states of its range, which it shares
+//!   (all-gather: they are sparse and short-lived);
 //! - computes the rates of its range and advances it (the rates are not exchanged);
 //! - sends the positions and smoothing lengths of its particles to the ranks whose neighbour
 //!   refresh reads them (those in the blocks of cells near their own particles, see
@@ -181,6 +182,24 @@ impl Ranks {
         return exchange::all_to_all(out);
         #[cfg(not(feature = "mpi"))]
         unreachable!("more than one rank without the mpi feature ({})", out.len());
+    }
+
+    /// Send each rank the `values` of the particles that `plan.send` names for it, and set
+    /// those of `plan.recv` from what each rank sends this one (on one rank: nothing).
+    pub fn swap<T: Copy>(&self, plan: &Plan, values: &mut [T]) {
+        if self.size == 1 {
+            return;
+        }
+        let out: Vec<Vec<T>> = plan
+            .send
+            .iter()
+            .map(|idx| idx.iter().map(|&i| values[i as usize]).collect())
+            .collect();
+        for (idx, got) in plan.recv.iter().zip(self.all_to_all(&out)) {
+            for (&i, v) in idx.iter().zip(got) {
+                values[i as usize] = v;
+            }
+        }
     }
 
     /// The smallest of the ranks' `value`s (exact in any order; on one rank: `value`).

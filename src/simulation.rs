@@ -692,15 +692,12 @@ impl<const D: usize> Simulation<D> {
             };
             self.busy += lap.elapsed().as_secs_f64();
             lap = Instant::now();
-            ranks.share(out, parts);
+            // The halo's corrections from their ranks (what the rate pass reads of them: B,
+            // and the surface indicator), and every rank's count of fallbacks.
+            ranks.swap(&self.plan, out);
+            fallbacks = ranks.sum(own as u64) as usize;
             self.exchanging += lap.elapsed().as_secs_f64();
             lap = Instant::now();
-            // The pass counted its own particles' fallbacks; with other ranks', all of them.
-            fallbacks = if ranks.size() > 1 {
-                out.par_iter().filter(|c| c.fallback).count()
-            } else {
-                own
-            };
             self.stats.correction_fallbacks += fallbacks as u64;
             // B and the surface indicator out of the corrections in one pass.
             self.corrections
