@@ -8,9 +8,9 @@
 //! - receives the state of its halo (the other ranks' particles that its own particles' lists
 //!   name, directly or through a symmetry plane's ghost) from their owners, point to point
 //!   ([`Plan`], rebuilt with the lists: [`Ranks::plan`], [`Ranks::all_to_all`]);
-//! - computes CN-SPH's corrections of its range and sends them to the ranks whose halo holds
-//!   them (over the halo's plan), and the colour states of its range, which it shares
-//!   (all-gather: they are sparse and short-lived);
+//! - computes CN-SPH's corrections and the colour states of its range and sends them to the
+//!   ranks whose halo holds them (over the halo's plan; of the colour states only those
+//!   other than the default, which few particles have);
 //! - computes the rates of its range and advances it (the rates are not exchanged);
 //! - sends the positions and smoothing lengths of its particles to the ranks whose neighbour
 //!   refresh reads them (those in the blocks of cells near their own particles, see

@@ -746,7 +746,7 @@ impl<const D: usize> Simulation<D> {
             }
             self.busy += lap.elapsed().as_secs_f64();
             lap = Instant::now();
-            self.colour.share(ranks, parts);
+            self.colour.swap(ranks, &self.plan);
             self.exchanging += lap.elapsed().as_secs_f64();
             lap = Instant::now();
             // A ghost's state is its source's, with the normal mirrored.

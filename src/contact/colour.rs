@@ -426,33 +426,29 @@ impl ColourStates {
         self.states.get(1..).unwrap_or(&[])
     }
 
-    /// After each rank has found the states of its own range `parts[rank]` of the real
-    /// particles, give every rank all of them: each rank's states go after those of the ranks
-    /// before it (the same order as one rank's), and its particles' slots move with them.
-    pub fn share(&mut self, ranks: crate::ranks::Ranks, parts: &[Range<usize>]) {
+    /// Under MPI, after each rank has found the states of its own range: the states of its
+    /// halo's particles from their ranks (over the halo's `plan`), each joining `states` after
+    /// this rank's own, its particle's slot with it. Only states other than the default
+    /// travel (few particles are near another body); the slots of the particles outside the
+    /// range and the halo stay at the default, and no pass reads them.
+    pub fn swap(&mut self, ranks: crate::ranks::Ranks, plan: &crate::ranks::Plan) {
         if ranks.size() == 1 {
             return;
         }
-        let mine = self.states.len() - 1;
-        let counts = ranks.gather_each(mine as f64);
-        let mut ranges = Vec::with_capacity(counts.len());
-        let mut start = 1;
-        for &c in &counts {
-            let c = c as usize;
-            ranges.push(start..start + c);
-            start += c;
+        let out: Vec<Vec<(u64, ColourState)>> = plan
+            .send
+            .iter()
+            .map(|idx| {
+                idx.iter()
+                    .filter(|&&i| self.slot[i as usize] != 0)
+                    .map(|&i| (u64::from(i), self[i as usize]))
+                    .collect()
+            })
+            .collect();
+        for (i, state) in ranks.all_to_all(&out).into_iter().flatten() {
+            self.slot[i as usize] = self.states.len() as u32;
+            self.states.push(state);
         }
-        let own = ranges[ranks.rank()].clone();
-        let found = std::mem::take(&mut self.states);
-        self.states = vec![ColourState::default(); start];
-        self.states[own.clone()].copy_from_slice(&found[1..]);
-        for k in &mut self.slot[parts[ranks.rank()].clone()] {
-            if *k != 0 {
-                *k += own.start as u32 - 1;
-            }
-        }
-        ranks.share(&mut self.states, &ranges);
-        ranks.share(&mut self.slot, parts);
     }
 
     /// Extend the states to the ghosts, in ghost order: each ghost gets its source's state with
