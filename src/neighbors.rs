@@ -356,7 +356,7 @@ impl NeighborList {
     /// Under MPI, the particles (real and ghost, by block) whose current positions and
     /// smoothing lengths [`NeighborList::refresh`] and [`NeighborList::rebuild_dirty`] read:
     /// the members of the blocks within one block of a block holding one of this rank's own
-    /// particles. None where the last full build made no blocks (a sparse grid: then the
+    /// particles. Empty where the last full build made no blocks (a sparse grid: then the
     /// refresh reads only this rank's own particles and their ghosts), or on one process.
     pub fn near_members(&self) -> impl Iterator<Item = u32> + '_ {
         let (starts, members) = (&self.block_start, &self.block_members);
