@@ -1131,6 +1131,89 @@ mod tests {
         assert!(lists < 60 * n / 2, "{lists} lists rebuilt");
     }
 
+    /// An MPI rank's refresh and partial rebuilds read only its own particles and the members
+    /// of its near blocks: here every other position is moved far away after each full build
+    /// (as a rank's store holds them, stale), yet the share answers as a share given the true
+    /// positions does, and its lists hold every pair. The moving particles are the share's own,
+    /// so that its own largest displacement is every rank's (the reduction is MPI's).
+    #[test]
+    fn a_share_reads_only_its_near_blocks() {
+        let mut seed = 11u64;
+        let own = 0..768;
+        // The share: a slab of the target (x < 0.3) and a projectile flying at it along x.
+        let mut x: Vec<Vector<3>> = (0..468)
+            .map(|_| Vector::<3>::new(0.3 * rnd(&mut seed), rnd(&mut seed), rnd(&mut seed)))
+            .collect();
+        x.extend((0..300).map(|_| {
+            Vector::<3>::new(-0.2, 0.35, 0.35)
+                + Vector::<3>::new(rnd(&mut seed), rnd(&mut seed), rnd(&mut seed)) * 0.25
+        }));
+        // The other ranks': the rest of the target.
+        x.extend(
+            (0..1800).map(|_| {
+                Vector::<3>::new(0.3 + 0.7 * rnd(&mut seed), rnd(&mut seed), rnd(&mut seed))
+            }),
+        );
+        let n = x.len();
+        let h = vec![0.05; n];
+        let skin = 0.01;
+        let (mut share, mut truth) = (NeighborList::default(), NeighborList::default());
+        share.own(own.clone());
+        truth.own(own.clone());
+        share.build(&x, &h, n, skin);
+        truth.build(&x, &h, n, skin);
+        let mut near = vec![false; n];
+        let mark = |nl: &NeighborList, near: &mut Vec<bool>| {
+            near.iter_mut()
+                .enumerate()
+                .for_each(|(i, m)| *m = own.contains(&i));
+            nl.near_members().for_each(|j| near[j as usize] = true);
+        };
+        mark(&share, &mut near);
+        let far = near.iter().filter(|&&m| !m).count();
+        assert!(far > 500, "only {far} particles outside the near blocks");
+        let (mut partial, mut rebuilt) = (0, 0);
+        for step in 0..40 {
+            for p in &mut x[468..768] {
+                p[0] += 0.006;
+            }
+            let stale: Vec<Vector<3>> = x
+                .iter()
+                .zip(&near)
+                .map(|(p, &m)| {
+                    if m {
+                        *p
+                    } else {
+                        p + Vector::<3>::repeat(100.0)
+                    }
+                })
+                .collect();
+            let need = share.refresh(&stale, &h, Ranks::SERIAL);
+            assert_eq!(need, truth.refresh(&x, &h, Ranks::SERIAL), "step {step}");
+            match need {
+                Refresh::Full => {
+                    share.build(&x, &h, n, skin);
+                    truth.build(&x, &h, n, skin);
+                    mark(&share, &mut near);
+                }
+                Refresh::Partial => {
+                    rebuilt += share.dirty_count;
+                    share.rebuild_dirty(&stale, &h);
+                    truth.rebuild_dirty(&x, &h);
+                    partial += 1;
+                }
+                Refresh::Valid => {}
+            }
+            let expect = brute(&x, &h, n);
+            for i in own.clone() {
+                assert!(
+                    expect[i].iter().all(|&j| share.list(i).any(|k| k == j)),
+                    "step {step}: a pair of particle {i} lost"
+                );
+            }
+        }
+        assert!(partial >= 10 && rebuilt > 0, "{partial} partial rebuilds");
+    }
     fn rnd(seed: &mut u64) -> f64 {
         *seed = seed
             .wrapping_mul(6364136223846793005)
