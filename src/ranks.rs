@@ -184,22 +184,44 @@ impl Ranks {
         unreachable!("more than one rank without the mpi feature ({})", out.len());
     }
 
-    /// Send each rank the `values` of the particles that `plan.send` names for it, and set
-    /// those of `plan.recv` from what each rank sends this one (on one rank: nothing).
-    pub fn swap<T: Copy>(&self, plan: &Plan, values: &mut [T]) {
+    /// Over `plan`, from `state`: the message to each rank r is what `pack` writes for the
+    /// particles `plan.send[r]`, and what each rank sends this one is read back by `unpack`
+    /// with the particles `plan.recv` names for it (MPI all-to-all; nothing on one rank).
+    pub fn exchange<S: ?Sized, T: Copy>(
+        &self,
+        plan: &Plan,
+        state: &mut S,
+        pack: impl Fn(&S, &[u32], &mut Vec<T>),
+        mut unpack: impl FnMut(&mut S, &[u32], &[T]),
+    ) {
         if self.size == 1 {
             return;
         }
         let out: Vec<Vec<T>> = plan
             .send
             .iter()
-            .map(|idx| idx.iter().map(|&i| values[i as usize]).collect())
+            .map(|idx| {
+                let mut message = Vec::new();
+                pack(state, idx, &mut message);
+                message
+            })
             .collect();
         for (idx, got) in plan.recv.iter().zip(self.all_to_all(&out)) {
-            for (&i, v) in idx.iter().zip(got) {
-                values[i as usize] = v;
-            }
+            unpack(state, idx, &got);
         }
+    }
+
+    /// [`Ranks::exchange`] of one value a particle: the `values` of the particles of
+    /// `plan.recv` become those their ranks hold.
+    pub fn swap<T: Copy>(&self, plan: &Plan, values: &mut [T]) {
+        let pack = |v: &[T], idx: &[u32], out: &mut Vec<T>| {
+            out.extend(idx.iter().map(|&i| v[i as usize]));
+        };
+        self.exchange(plan, values, pack, |v, idx, got| {
+            for (&i, &g) in idx.iter().zip(got) {
+                v[i as usize] = g;
+            }
+        });
     }
 
     /// The smallest of the ranks' `value`s (exact in any order; on one rank: `value`).

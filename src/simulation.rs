@@ -465,13 +465,8 @@ impl<const D: usize> Simulation<D> {
             return;
         }
         let p = &mut self.particles;
-        swap(
-            self.ranks,
-            &self.plan,
-            p,
-            Particles::pack,
-            Particles::unpack,
-        );
+        self.ranks
+            .exchange(&self.plan, p, Particles::pack, Particles::unpack);
         self.ghosts.update(p, &self.symmetry);
     }
 
@@ -482,7 +477,7 @@ impl<const D: usize> Simulation<D> {
     fn send_positions(&mut self) {
         let p = &mut self.particles;
         let (pack, unpack) = (Particles::pack_positions, Particles::unpack_positions);
-        swap(self.ranks, &self.positions, p, pack, unpack);
+        self.ranks.exchange(&self.positions, p, pack, unpack);
     }
 
     /// The particles of other ranks that this rank's passes read: those that the lists of its
@@ -1075,30 +1070,6 @@ fn rebalance<const D: usize>(
         start = end;
     }
     parts
-}
-
-/// Send each rank the states of the particles `plan.send` names for it, written by `pack`,
-/// and read what each sends this rank into the particles of `plan.recv` by `unpack` (MPI
-/// all-to-all).
-fn swap<const D: usize>(
-    ranks: Ranks,
-    plan: &crate::ranks::Plan,
-    p: &mut Particles<D>,
-    pack: fn(&Particles<D>, &[u32], &mut Vec<u8>),
-    unpack: fn(&mut Particles<D>, &[u32], &[u8]),
-) {
-    let out: Vec<Vec<u8>> = plan
-        .send
-        .iter()
-        .map(|idx| {
-            let mut b = Vec::new();
-            pack(p, idx, &mut b);
-            b
-        })
-        .collect();
-    for (idx, bytes) in plan.recv.iter().zip(ranks.all_to_all(&out)) {
-        unpack(p, idx, &bytes);
-    }
 }
 
 /// The neighbour search radius of each particle (ghosts included): its smoothing length, or

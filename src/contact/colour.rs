@@ -432,23 +432,16 @@ impl ColourStates {
     /// travel (few particles are near another body); the slots of the particles outside the
     /// range and the halo stay at the default, and no pass reads them.
     pub fn swap(&mut self, ranks: crate::ranks::Ranks, plan: &crate::ranks::Plan) {
-        if ranks.size() == 1 {
-            return;
-        }
-        let out: Vec<Vec<(u64, ColourState)>> = plan
-            .send
-            .iter()
-            .map(|idx| {
-                idx.iter()
-                    .filter(|&&i| self.slot[i as usize] != 0)
-                    .map(|&i| (u64::from(i), self[i as usize]))
-                    .collect()
-            })
-            .collect();
-        for (i, state) in ranks.all_to_all(&out).into_iter().flatten() {
-            self.slot[i as usize] = self.states.len() as u32;
-            self.states.push(state);
-        }
+        let pack = |c: &Self, idx: &[u32], out: &mut Vec<(u64, ColourState)>| {
+            let kept = idx.iter().filter(|&&i| c.slot[i as usize] != 0);
+            out.extend(kept.map(|&i| (u64::from(i), c[i as usize])));
+        };
+        ranks.exchange(plan, self, pack, |c, _, got| {
+            for &(i, state) in got {
+                c.slot[i as usize] = c.states.len() as u32;
+                c.states.push(state);
+            }
+        });
     }
 
     /// Extend the states to the ghosts, in ghost order: each ghost gets its source's state with
