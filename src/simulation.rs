@@ -401,7 +401,10 @@ impl<const D: usize> Simulation<D> {
     pub fn halo_census(&self, count: usize, curve: Curve) -> Vec<crate::ranks::Halo> {
         let p = &self.particles;
         let n = p.n_real;
-        if self.ranks.size() > 1 || self.neighbors.len() != n || self.rates.particles.len() != n {
+        if self.ranks.size() > 1
+            || self.neighbors.len() != n
+            || self.rates.particles.range() != (0..n)
+        {
             return Vec::new();
         }
         let order = match curve {
@@ -613,13 +616,14 @@ impl<const D: usize> Simulation<D> {
                 self.busy += start.elapsed().as_secs_f64();
             }
         }
+        let mut counts = Vec::new();
         if need == Refresh::Full && distributed {
             // Each rank has advanced only its own range since the ranges were set: before they
             // change (and the order with them), every rank takes every particle's state, and
-            // the rates, whose neighbour counts weigh the new ranges.
+            // the neighbour counts of the last pass, which weigh the new ranges.
             let lap = Instant::now();
             p.share_real(self.ranks, &self.parts);
-            self.ranks.share(&mut self.rates.particles, &self.parts);
+            counts = neighbour_counts(self.ranks, &self.rates.particles, &self.parts);
             self.exchanging += lap.elapsed().as_secs_f64();
         }
         if need == Refresh::Full {
@@ -641,7 +645,7 @@ impl<const D: usize> Simulation<D> {
             let times = self.ranks.gather_each(std::mem::take(&mut self.busy));
             let old = (&self.parts[..], &times[..]);
             let order = reordered.then_some(&self.order[..]);
-            self.parts = rebalance(self.ranks, p.n_real, &self.rates.particles, old, order);
+            self.parts = rebalance(self.ranks, p.n_real, &counts, old, order);
             // The permutation is needed again only at the next reordering, 50 steps on: kept,
             // it would hold 8 bytes a particle through every step between.
             self.order = Vec::new();
@@ -778,7 +782,9 @@ impl<const D: usize> Simulation<D> {
         // The stable step, its growth limited to 25 % a step; the collapse check uses it before
         // it is shortened to land on an output time. (min and max are exact in any order.)
         let mut dt_stable = ranks.min(
-            self.rates.particles[owned.clone()]
+            self.rates
+                .particles
+                .as_slice()
                 .par_iter()
                 .map(|r| r.dt)
                 .reduce(|| f64::INFINITY, f64::min),
@@ -833,7 +839,8 @@ impl<const D: usize> Simulation<D> {
             dt,
             body_contact_force: vec![[0.0; 3]; bodies],
             interactions: self.ranks.sum(
-                rates[owned.clone()]
+                rates
+                    .as_slice()
                     .par_iter()
                     .map(|r| u64::from(r.neighbors))
                     .sum(),
@@ -914,7 +921,12 @@ impl<const D: usize> Simulation<D> {
         let collapsed = dt_stable < 1e-6 * dt_first || dt_stable.is_nan();
         if self.ranks.size() > 1 && (self.ranks.any(bad.is_some()) || stalled || collapsed) {
             self.particles.share_real(self.ranks, &parts);
-            self.ranks.share(&mut self.rates.particles[..n], &parts);
+            // Each rank holds the rates of its own range only.
+            let mut all = vec![physics::ParticleRates::default(); n];
+            let held = self.rates.particles.range();
+            all[held].copy_from_slice(self.rates.particles.as_slice());
+            self.ranks.share(&mut all, &parts);
+            self.rates.particles = physics::OwnRates::whole(all);
             bad = self.first_bad(0..n, dt);
         }
         let p = &self.particles;
@@ -1019,31 +1031,51 @@ impl<const D: usize> Simulation<D> {
     }
 }
 
+/// Every real particle's neighbour count at the last pass (zero where its rank evaluated none
+/// yet), by index: each rank's own from its rates, all-gathered over the ranges `parts` (4 bytes
+/// a particle, where the rates are 152 in 3D).
+fn neighbour_counts<const D: usize>(
+    ranks: Ranks,
+    rates: &physics::OwnRates<D>,
+    parts: &[Range<usize>],
+) -> Vec<u32> {
+    let n = parts.last().map_or(0, |r| r.end);
+    let mut counts = vec![0u32; n];
+    let own = parts[ranks.rank()].clone();
+    if rates.range() == own {
+        for (c, r) in counts[own].iter_mut().zip(rates.as_slice()) {
+            *c = r.neighbors;
+        }
+    }
+    ranks.share(&mut counts, parts);
+    counts
+}
+
 /// The ranks' ranges of the `n` real particles until the next full build (before it: the
 /// lists are built for them). Each particle weighs its neighbour count in the last pass
-/// (`rates`: the pass's cost) times the seconds per neighbour its rank took since the `old`
+/// (`counts`, by old index: the pass's cost) times the seconds per neighbour its rank took since the `old`
 /// ranges were set (`old.1`: each rank's time), so that costs the count does not see (a fast
 /// particle's search at every step) move work away from the rank that had them. `order`: the
 /// old index of each particle, where they were reordered since. Every rank computes the same
 /// ranges (from the exchanged times); the results do not depend on them.
-fn rebalance<const D: usize>(
+fn rebalance(
     ranks: Ranks,
     n: usize,
-    rates: &[physics::ParticleRates<D>],
+    counts: &[u32],
     (old, times): (&[Range<usize>], &[f64]),
     order: Option<&[usize]>,
 ) -> Vec<Range<usize>> {
     if ranks.size() == 1 {
         return ranks.split(n, |_| 0.0);
     }
-    let base = |k: usize| rates.get(k).map_or(0.0, |r| f64::from(r.neighbors)) + 8.0;
+    let base = |k: usize| counts.get(k).map_or(0.0, |&c| f64::from(c)) + 8.0;
     // Seconds per unit of weight of each old range (1 where nothing was measured yet).
     let per: Vec<f64> = old
         .iter()
         .zip(times)
         .map(|(r, &t)| {
             let w: f64 = r.clone().map(base).sum();
-            if t > 0.0 && w > 0.0 && rates.len() == n {
+            if t > 0.0 && w > 0.0 && counts.len() == n {
                 t / w
             } else {
                 1.0
@@ -1099,10 +1131,10 @@ mod tests {
     #[test]
     fn ranges_start_at_whole_blocks() {
         let none: (&[Range<usize>], &[f64]) = (&[], &[]);
-        let parts = rebalance::<3>(Ranks::pretend(0, 3), 1000, &[], none, None);
+        let parts = rebalance(Ranks::pretend(0, 3), 1000, &[], none, None);
         assert_eq!(parts, vec![0..256, 256..768, 768..1000]);
         assert_eq!(blocks_of(&parts, 2), vec![0..2, 2..6, 6..8]);
-        let parts = rebalance::<3>(Ranks::pretend(1, 3), 300, &[], none, None);
+        let parts = rebalance(Ranks::pretend(1, 3), 300, &[], none, None);
         assert_eq!(parts, vec![0..0, 0..256, 256..300]);
         assert_eq!(blocks_of(&parts, 1), vec![0..0, 0..1, 1..2]);
     }

@@ -289,10 +289,63 @@ impl<const D: usize> Default for ParticleRates<D> {
     }
 }
 
-/// The pass's output (one record per real particle) and its work buffers.
+/// The rates of the real particles a pass evaluated, indexed by particle (`rates[i]` for `i` in
+/// [`OwnRates::range`]): every real particle on one process, an MPI rank's own range under
+/// MPI, which keeps no record of the particles the other ranks advance (152 bytes a particle
+/// in 3D; until 2026-12-01 every rank held every particle's, and all-gathered them at each
+/// full search for the neighbour counts that weigh the ranges).
+#[derive(Debug, Default, Clone)]
+pub struct OwnRates<const D: usize> {
+    first: usize,
+    rates: Vec<ParticleRates<D>>,
+}
+
+impl<const D: usize> OwnRates<D> {
+    /// Every real particle's rates, `rates[i]` for particle `i`.
+    pub fn whole(rates: Vec<ParticleRates<D>>) -> Self {
+        OwnRates { first: 0, rates }
+    }
+
+    /// The particles whose rates are held.
+    pub fn range(&self) -> Range<usize> {
+        self.first..self.first + self.rates.len()
+    }
+
+    /// The rates held, in particle order from `range().start`.
+    pub fn as_slice(&self) -> &[ParticleRates<D>] {
+        &self.rates
+    }
+
+    /// Particle `i`'s rates, where held.
+    pub fn get(&self, i: usize) -> Option<&ParticleRates<D>> {
+        i.checked_sub(self.first).and_then(|k| self.rates.get(k))
+    }
+
+    /// Hold the rates of `range` (their values are the next pass's to write).
+    fn hold(&mut self, range: Range<usize>) {
+        self.first = range.start;
+        self.rates.resize(range.len(), ParticleRates::default());
+    }
+
+    /// The rates of the particles `range` (within [`OwnRates::range`]).
+    fn slice_mut(&mut self, range: Range<usize>) -> &mut [ParticleRates<D>] {
+        &mut self.rates[range.start - self.first..range.end - self.first]
+    }
+}
+
+impl<const D: usize> std::ops::Index<usize> for OwnRates<D> {
+    type Output = ParticleRates<D>;
+
+    #[inline]
+    fn index(&self, i: usize) -> &ParticleRates<D> {
+        &self.rates[i - self.first]
+    }
+}
+
+/// The pass's output (one record per real particle evaluated) and its work buffers.
 #[derive(Debug, Default, Clone)]
 pub struct Rates<const D: usize> {
-    pub particles: Vec<ParticleRates<D>>,
+    pub particles: OwnRates<D>,
     /// The contact force f_c (N) on each real particle (at least; the pass writes the first
     /// `n_real`). The simulation lends the particles' own array
     /// ([`crate::particles::Particles::contact_force`]) here for the pass and takes it back
@@ -770,7 +823,7 @@ fn compute_rates_on<const D: usize, K: Kernel>(
     tail.reserve_exact(all + 1 - split);
     tail.resize(all + 1 - split, Gather::padding());
     build_records(p, ratio, split..all + 1, tail);
-    particles.resize(n, ParticleRates::default());
+    particles.hold(range.clone());
     if contact_force.len() < n {
         contact_force.resize(n, Vector::zeros());
     }
@@ -813,7 +866,8 @@ fn compute_rates_on<const D: usize, K: Kernel>(
         // portable.
         macro_rules! run {
             ($art:literal, $cn:literal) => {
-                particles[evaluated.clone()]
+                particles
+                    .slice_mut(evaluated.clone())
                     .par_iter_mut()
                     .zip(&mut contact_force[evaluated.clone()])
                     .enumerate()
@@ -2372,9 +2426,16 @@ mod tests {
         assert!(wide.cracks.wide && !portable.cracks.wide && !wide.cracks.items.is_empty());
         assert!(wide
             .particles
+            .as_slice()
             .iter()
             .all(|r| r.acc.norm() > 0.0 && r.de != 0.0));
-        for (i, (a, b)) in wide.particles.iter().zip(&portable.particles).enumerate() {
+        for (i, (a, b)) in wide
+            .particles
+            .as_slice()
+            .iter()
+            .zip(portable.particles.as_slice())
+            .enumerate()
+        {
             assert_eq!(a, b, "particle {i}");
         }
         assert_eq!(wide.contact_force, portable.contact_force);
@@ -2398,7 +2459,13 @@ mod tests {
         let b: Vec<Tensor<3>> = cw.iter().map(|c| c.b).collect();
         pass(&b, &mut wide, true);
         pass(&b, &mut portable, false);
-        for (i, (a, b)) in wide.particles.iter().zip(&portable.particles).enumerate() {
+        for (i, (a, b)) in wide
+            .particles
+            .as_slice()
+            .iter()
+            .zip(portable.particles.as_slice())
+            .enumerate()
+        {
             assert_eq!(a, b, "CN-SPH, particle {i}");
         }
         assert_eq!(wide.contact_force, portable.contact_force);
@@ -2420,8 +2487,18 @@ mod tests {
                 let w = WINDOW_PAGES;
                 compute_rates_on(CubicSpline, &p, &nl, &model, fields, &all, out, wide, w);
             }
-            assert!(filtered.particles.iter().any(|r| r.acc.norm() > 0.0));
-            for (i, (a, b)) in filtered.particles.iter().zip(&with.particles).enumerate() {
+            assert!(filtered
+                .particles
+                .as_slice()
+                .iter()
+                .any(|r| r.acc.norm() > 0.0));
+            for (i, (a, b)) in filtered
+                .particles
+                .as_slice()
+                .iter()
+                .zip(with.particles.as_slice())
+                .enumerate()
+            {
                 assert_eq!(a, b, "CN-SPH, marked supports, particle {i} (wide: {wide})");
             }
             assert_eq!(filtered.contact_force, with.contact_force);
@@ -2508,7 +2585,14 @@ mod tests {
             let held = paged.gather.len();
             assert!(held < p.n_real, "{held} records");
             assert!(whole.gather.len() >= owned.len());
-            assert!(whole.particles[owned.clone()]
+            assert_eq!(
+                whole.particles.range(),
+                owned.clone(),
+                "only the rates evaluated are held"
+            );
+            assert!(whole
+                .particles
+                .as_slice()
                 .iter()
                 .all(|r| r.acc.norm() > 0.0));
             assert!(whole.contact_force.iter().any(|f| f.norm() > 0.0));
@@ -2574,6 +2658,7 @@ shape = { type = "rectangle", min = [0.0, 0.0], max = [8.0e-3, 6.0e-3] }
         );
         let worst = |r: &Rates<2>| {
             r.particles
+                .as_slice()
                 .iter()
                 .map(|x| (x.grad_v - g).norm() / g.norm())
                 .fold(0.0, f64::max)
@@ -2657,6 +2742,7 @@ shape = { type = "rectangle", min = [0.0, 0.0], max = [8.0e-3, 6.0e-3] }
                 let rates = all_rates(&p, &nl, &model, &b);
                 let worst = rates
                     .particles
+                    .as_slice()
                     .iter()
                     .map(|r| (r.grad_v - g).norm() / g.norm())
                     .fold(0.0, f64::max);
