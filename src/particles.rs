@@ -287,6 +287,17 @@ impl<const D: usize> Particles<D> {
         for_each_field!(share);
     }
 
+    /// [`Particles::share_real`] of the positions and smoothing lengths only.
+    pub fn share_positions(
+        &mut self,
+        ranks: crate::ranks::Ranks,
+        parts: &[std::ops::Range<usize>],
+    ) {
+        let n = self.n_real;
+        ranks.share(&mut self.x[..n], parts);
+        ranks.share(&mut self.h[..n], parts);
+    }
+
     /// Position as a 3-vector (z = 0 in 2D), for output.
     pub fn position3(&self, i: usize) -> [f64; 3] {
         to3(&self.x[i])

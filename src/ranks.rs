@@ -22,14 +22,19 @@
 //!   (`neighbors::NeighborList::refresh`);
 //! - takes the smallest time step, the checks and the mixing figures by exact reductions.
 //!
-//! At a full search (at least every `REORDER_EVERY` steps, where the ranges may change) and
-//! before a checkpoint or a cross-section the ranks all-gather every particle's state. A
+//! At a full search (at least every `REORDER_EVERY` steps, where the ranges may change) the
+//! ranks all-gather every particle's position and smoothing length (what the cell order and
+//! the lists are made of) and its neighbour count (what weighs the new ranges); then each
+//! rank receives, point to point, the whole state of the particles of its new range and halo
+//! that another rank advanced last (the migration of the particles that change ranks: every
+//! rank knows who held each from the old ranges and the reordering, [`Ranks::plan_from`]).
+//! Before a checkpoint or a cross-section the ranks all-gather every particle's state. A
 //! particle's results come from exactly the arithmetic of the serial run whichever rank
 //! computes them, and the sums are added in the serial order, so an MPI run is bit-identical
 //! to the serial one on any number of ranks, and a checkpoint restarts on any number. What it
-//! does not give yet is memory per rank falling with the ranks (each holds the whole store,
-//! most of it stale between full searches) or scaling past a few dozen ranks (the whole state
-//! is all-gathered at each full search): see the README's "Not yet".
+//! does not give yet is memory per rank falling with the ranks (each holds storage for every
+//! particle, most of it stale) or scaling past a few dozen ranks (the positions are
+//! all-gathered at each full search, and the slabs' halos grow): see the README's "Not yet".
 //!
 //! **What a range needs of the others.** The cell order is a raster scan of the cells (the last
 //! axis fastest), so a contiguous range is a slab across the first axis: it touches at most two
@@ -163,10 +168,15 @@ impl Ranks {
     /// read (distinct, ascending), asked of their owners under the ranges `parts`; each
     /// owner learns which of its particles to send (an all-to-all of the lists).
     pub fn plan(&self, parts: &[Range<usize>], needed: &[u32]) -> Plan {
+        self.plan_from(needed, |j| parts.partition_point(|r| r.end <= j as usize))
+    }
+
+    /// The plan that brings this rank the particles `needed` (ascending), each from the rank
+    /// `holder` names for it (every rank must name the same one).
+    pub fn plan_from(&self, needed: &[u32], holder: impl Fn(u32) -> usize) -> Plan {
         let mut recv = vec![Vec::new(); self.size];
         for &j in needed {
-            let owner = parts.partition_point(|r| r.end <= j as usize);
-            recv[owner.min(self.size - 1)].push(j);
+            recv[holder(j).min(self.size - 1)].push(j);
         }
         let send = self.all_to_all(&recv);
         Plan { send, recv }

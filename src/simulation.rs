@@ -96,6 +96,9 @@ pub struct Simulation<const D: usize> {
     /// those of the particles near its own that the next neighbour refresh reads (see
     /// `NeighborList::near_members`), set at each full search.
     positions: crate::ranks::Plan,
+    /// Between a full search's reordering and its halo: the ranges before it and, where the
+    /// particles were reordered, each one's index before (see `receive_halo`).
+    moved: Option<(Vec<Range<usize>>, Vec<usize>)>,
     /// Seconds this rank spent on its own share since the ranges were set (to balance the
     /// next ones), and in the exchanges between ranks in all.
     busy: f64,
@@ -330,6 +333,7 @@ impl<const D: usize> Simulation<D> {
             plan: Default::default(),
             halo: Vec::new(),
             positions: Default::default(),
+            moved: None,
             busy: 0.0,
             exchanging: 0.0,
             balanced: 0,
@@ -431,8 +435,12 @@ impl<const D: usize> Simulation<D> {
 
     /// Under MPI: every particle of another rank that this rank's lists name (ghosts by their
     /// sources) comes from its owner, as the owner advanced it, and the ghosts then take their
-    /// sources' states again. The plan changes with the lists (`need`: this step's search);
-    /// after a full search every rank holds every particle's state already.
+    /// sources' states again. The plan changes with the lists (`need`: this step's search).
+    ///
+    /// After a full search the ranges may have changed: the state of each particle of this
+    /// rank's new range and halo comes from the rank that advanced it last (the migration of
+    /// the particles that changed ranks, and the new halo), which every rank knows from the
+    /// old ranges and the reordering (`moved`).
     fn receive_halo(&mut self, need: Refresh) {
         if need != Refresh::Valid {
             // A partial rebuild changes only the rebuilt lists: their particles join the full
@@ -464,19 +472,33 @@ impl<const D: usize> Simulation<D> {
                 self.plan = self.ranks.plan(&self.parts, &needed);
             }
         }
-        if need == Refresh::Full {
-            return;
-        }
         let p = &mut self.particles;
-        self.ranks
-            .exchange(&self.plan, p, Particles::pack, Particles::unpack);
+        match (need, self.moved.take()) {
+            (Refresh::Full, Some((old, order))) => {
+                let rank = self.ranks.rank();
+                let before = |i: u32| order.get(i as usize).map_or(i as usize, |&k| k);
+                let was = |i: u32| old.partition_point(|r| r.end <= before(i));
+                let mut wanted: Vec<u32> = self.parts[rank].clone().map(|i| i as u32).collect();
+                wanted.extend_from_slice(&self.halo);
+                wanted.par_sort_unstable();
+                wanted.retain(|&i| was(i) != rank);
+                let moving = self.ranks.plan_from(&wanted, was);
+                self.ranks
+                    .exchange(&moving, p, Particles::pack, Particles::unpack);
+            }
+            // The first search: every rank holds every particle's state.
+            (Refresh::Full, None) => {}
+            _ => self
+                .ranks
+                .exchange(&self.plan, p, Particles::pack, Particles::unpack),
+        }
         self.ghosts.update(p, &self.symmetry);
     }
 
     /// Under MPI, after a step: the positions and smoothing lengths of this rank's particles
     /// to the ranks whose next neighbour refresh reads them, and theirs to this rank (the
     /// position plan of the last full search). The others' stay as they were: no pass reads
-    /// them before the next full search gathers every particle's state.
+    /// them before the next full search gathers every particle's position.
     fn send_positions(&mut self) {
         let p = &mut self.particles;
         let (pack, unpack) = (Particles::pack_positions, Particles::unpack_positions);
@@ -619,10 +641,12 @@ impl<const D: usize> Simulation<D> {
         let mut counts = Vec::new();
         if need == Refresh::Full && distributed {
             // Each rank has advanced only its own range since the ranges were set: before they
-            // change (and the order with them), every rank takes every particle's state, and
-            // the neighbour counts of the last pass, which weigh the new ranges.
+            // change (and the order with them), every rank takes every particle's position and
+            // smoothing length, which the order and the lists are made of, and the neighbour
+            // counts of the last pass, which weigh the new ranges. The rest of the state goes
+            // only where the new ranges need it (`receive_halo`).
             let lap = Instant::now();
-            p.share_real(self.ranks, &self.parts);
+            p.share_positions(self.ranks, &self.parts);
             counts = neighbour_counts(self.ranks, &self.rates.particles, &self.parts);
             self.exchanging += lap.elapsed().as_secs_f64();
         }
@@ -645,10 +669,15 @@ impl<const D: usize> Simulation<D> {
             let times = self.ranks.gather_each(std::mem::take(&mut self.busy));
             let old = (&self.parts[..], &times[..]);
             let order = reordered.then_some(&self.order[..]);
-            self.parts = rebalance(self.ranks, p.n_real, &counts, old, order);
-            // The permutation is needed again only at the next reordering, 50 steps on: kept,
-            // it would hold 8 bytes a particle through every step between.
-            self.order = Vec::new();
+            let parts = rebalance(self.ranks, p.n_real, &counts, old, order);
+            let old = std::mem::replace(&mut self.parts, parts);
+            // The permutation is needed again by this step's halo (under MPI) and at the next
+            // reordering, 50 steps on: kept, it would hold 8 bytes a particle through every
+            // step between.
+            let order = std::mem::take(&mut self.order);
+            if distributed {
+                self.moved = Some((old, if reordered { order } else { Vec::new() }));
+            }
             if self.ranks.size() > 1 {
                 self.neighbors.own(self.parts[self.ranks.rank()].clone());
             }
