@@ -671,9 +671,9 @@ impl<const D: usize> Simulation<D> {
             let order = reordered.then_some(&self.order[..]);
             let parts = rebalance(self.ranks, p.n_real, &counts, old, order);
             let old = std::mem::replace(&mut self.parts, parts);
-            // The permutation is needed again by this step's halo (under MPI) and at the next
-            // reordering, 50 steps on: kept, it would hold 8 bytes a particle through every
-            // step between.
+            // The permutation is needed by this step's halo under MPI (`moved`: who held each
+            // particle), then not before the next reordering, 50 steps on: kept, it would hold
+            // 8 bytes a particle through every step between.
             let order = std::mem::take(&mut self.order);
             if distributed {
                 self.moved = Some((old, if reordered { order } else { Vec::new() }));
