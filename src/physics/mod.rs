@@ -2107,6 +2107,14 @@ fn tension_cut<const D: usize, K: Kernel, const CN: bool>(
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// The two passes' rates agree particle by particle (`what` prefixes the message).
+    fn same_rates<const D: usize>(a: &OwnRates<D>, b: &OwnRates<D>, what: &str) {
+        assert_eq!(a.range(), b.range(), "{what}the particles evaluated");
+        for (i, (a, b)) in a.range().zip(a.as_slice().iter().zip(b.as_slice())) {
+            assert_eq!(a, b, "{what}particle {i}");
+        }
+    }
     use crate::kernel::CubicSpline;
     use crate::particles::Tensor;
     use crate::tensor::Sym;
@@ -2429,15 +2437,7 @@ mod tests {
             .as_slice()
             .iter()
             .all(|r| r.acc.norm() > 0.0 && r.de != 0.0));
-        for (i, (a, b)) in wide
-            .particles
-            .as_slice()
-            .iter()
-            .zip(portable.particles.as_slice())
-            .enumerate()
-        {
-            assert_eq!(a, b, "particle {i}");
-        }
+        same_rates(&wide.particles, &portable.particles, "");
         assert_eq!(wide.contact_force, portable.contact_force);
         // CN-SPH: the correction pass, then the rates with B.
         let bodies = p.body.clone();
@@ -2459,15 +2459,7 @@ mod tests {
         let b: Vec<Tensor<3>> = cw.iter().map(|c| c.b).collect();
         pass(&b, &mut wide, true);
         pass(&b, &mut portable, false);
-        for (i, (a, b)) in wide
-            .particles
-            .as_slice()
-            .iter()
-            .zip(portable.particles.as_slice())
-            .enumerate()
-        {
-            assert_eq!(a, b, "CN-SPH, particle {i}");
-        }
+        same_rates(&wide.particles, &portable.particles, "CN-SPH, ");
         assert_eq!(wide.contact_force, portable.contact_force);
         // The supports the correction pass marks (once the lists are classified by body) give
         // the filter's rates to the bit, with failed particles among them.
@@ -2492,15 +2484,8 @@ mod tests {
                 .as_slice()
                 .iter()
                 .any(|r| r.acc.norm() > 0.0));
-            for (i, (a, b)) in filtered
-                .particles
-                .as_slice()
-                .iter()
-                .zip(with.particles.as_slice())
-                .enumerate()
-            {
-                assert_eq!(a, b, "CN-SPH, marked supports, particle {i} (wide: {wide})");
-            }
+            let what = format!("CN-SPH, marked supports (wide: {wide}), ");
+            same_rates(&filtered.particles, &with.particles, &what);
             assert_eq!(filtered.contact_force, with.contact_force);
         }
     }
