@@ -1104,7 +1104,7 @@ fn rebalance(
         .zip(times)
         .map(|(r, &t)| {
             let w: f64 = r.clone().map(base).sum();
-            if t > 0.0 && w > 0.0 && counts.len() == n {
+            if t > 0.0 && w > 0.0 {
                 t / w
             } else {
                 1.0

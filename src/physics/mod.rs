@@ -316,11 +316,6 @@ impl<const D: usize> OwnRates<D> {
         &self.rates
     }
 
-    /// Particle `i`'s rates, where held.
-    pub fn get(&self, i: usize) -> Option<&ParticleRates<D>> {
-        i.checked_sub(self.first).and_then(|k| self.rates.get(k))
-    }
-
     /// Hold the rates of `range` (their values are the next pass's to write).
     fn hold(&mut self, range: Range<usize>) {
         self.first = range.start;
