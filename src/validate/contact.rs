@@ -1156,8 +1156,8 @@ fn hertz_force(m: f64, es: f64, rs: f64, v: f64, t_c: f64) -> Vec<(f64, f64)> {
 
 /// Two equal elastic aluminium spheres at ±50 m/s (`examples/hertz_spheres.toml`, quarter
 /// model), R/Δp = 16 and 20 (`fine`: 20 and 30): the peak force and the contact time within
-/// 10 % of Hertz's, the error not growing with refinement; the force released and never tensile; restitution above
-/// 0.95; no mixing; energy within 1 %. Conventional SPH's total (contact potential Φ included)
+/// 10 % of Hertz's, the error not growing with refinement; the force released and never
+/// tensile; restitution above 0.95; no mixing; energy within 1 %. Conventional SPH's total (contact potential Φ included)
 /// is held throughout; CN-SPH's contact exchanges with the motion only the normal part of Φ's
 /// gradient, so during the contact its total counts the rest of Φ too (+2 % at the deepest
 /// compression at R/Δp = 20), and what is held is the drift once the spheres part (Φ = 0).
@@ -1165,11 +1165,11 @@ fn hertz_force(m: f64, es: f64, rs: f64, v: f64, t_c: f64) -> Vec<(f64, f64)> {
 /// tolerance has ended by then, and the spheres have flown apart for a sixth of it (about
 /// 4 µs) to show that it stays released. Figure: the force against Hertz's.
 ///
-/// Below R/Δp = 16 the contact is not yet resolved: Hertz's contact radius is 2.0 mm and the
+/// Below R/Δp = 16 the contact is barely resolved: Hertz's contact radius is 2.0 mm and the
 /// approach 0.82 mm, so at R/Δp = 12 the patch is 2.4 spacings in radius and the approach one
-/// spacing, and the error there (7.3 % conventional, 6.4 % CN-SPH) is smaller than at 14
-/// (9.0 / 7.6 %) by chance of where the lattice's layers fall. From 14 on it shrinks: 9.0 /
-/// 8.6 / 7.3 / 4.8 % at 14 / 16 / 20 / 30 (measured 2026-12-01).
+/// spacing. The error is not monotone there: 7.3 % at 12 against 9.0 % at 14 (CN-SPH 6.4 /
+/// 7.6 %); from 14 on it shrinks, 9.0 / 8.6 / 7.3 / 4.8 % at 14 / 16 / 20 / 30 (CN-SPH 7.6 /
+/// 7.4 / 6.6 / 5.3 %; measured 2026-12-01). Why 12 reads better is not known.
 pub fn hertz(fine: bool) -> Result<Outcome> {
     let base = example("hertz_spheres")?;
     let (r, dp0) = match base.bodies[0].shape {
