@@ -1159,8 +1159,9 @@ fn hertz_force(m: f64, es: f64, rs: f64, v: f64, t_c: f64) -> Vec<(f64, f64)> {
 /// 10 % of Hertz's, the error not growing with refinement; the force released and never
 /// tensile; restitution above 0.95; no mixing; energy within 1 %. Conventional SPH's total
 /// (contact potential Φ included) is held throughout; CN-SPH's contact exchanges with the
-/// motion only the normal part of Φ's gradient, so during the contact its total counts the rest of Φ too (+2 % at the deepest
-/// compression at R/Δp = 20), and what is held is the drift once the spheres part (Φ = 0).
+/// motion only the normal part of Φ's gradient, so during the contact its total counts the
+/// rest of Φ too (+2 % at the deepest compression at R/Δp = 20), and what is held is the drift
+/// once the spheres part (Φ = 0).
 /// Each run ends at 1.12 t_c of Hertz (the deck's end time at most): a contact within the 10 %
 /// tolerance has ended by then, and the spheres have flown apart for a sixth of it (about
 /// 4 µs) to show that it stays released. Figure: the force against Hertz's.
