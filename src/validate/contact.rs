@@ -1696,12 +1696,12 @@ pub fn crater_shape(
 /// away from it, no mixing and momentum. Reported beside the depth: the depth over the crater's
 /// diameter at the surface, against the 0.56–0.60 of LDEF's aluminium craters (Love, Brownlee,
 /// King & Hörz 1993, LPSC 24, 809: normal impacts above 5 km/s, the ratio independent of size,
-/// speed and hardness). Coarse: d/Δp = 6 and 8 (about 7 minutes on 2 cores);
-/// `fine`: 8 and 10 (about 18). Measured on 2026-11-30: depth 1.965 / 2.283 / 2.140 mm at
-/// d/Δp = 6 / 8 / 10, +11.2 / +35.7 / +26.8 % (1.94 / 2.29 / 2.25 mm on 2026-11-29, the loose
-/// failed layer counted or not), diameter 3.60 / 3.53 / 3.14 mm, depth over diameter 0.546 /
-/// 0.646 / 0.681: the coarse pair fails its convergence check, and the crater grows too deep
-/// for its width with refinement (README, Not yet).
+/// speed and hardness). Coarse: d/Δp = 6 and 8 (18 minutes on 2 cores, measured 2026-12-01);
+/// `fine`: 8 and 10 (about 45, estimated from the rate). Measured on 2026-11-30: depth 1.965 /
+/// 2.283 / 2.140 mm at d/Δp = 6 / 8 / 10, +11.2 / +35.7 / +26.8 % (1.94 / 2.29 / 2.25 mm on
+/// 2026-11-29, the loose failed layer counted or not), diameter 3.60 / 3.53 / 3.14 mm, depth
+/// over diameter 0.546 / 0.646 / 0.681: the coarse pair fails its convergence check, and the
+/// crater grows too deep for its width with refinement (README, Not yet).
 pub fn crater(fine: bool) -> Result<Outcome> {
     let source = "Cour-Palais crater depth (Christiansen 1991, NASA/TM-2009-214785)";
     let (hb, c) = (95.0, (68.9e9_f64 / 2700.0).sqrt());
