@@ -37,8 +37,9 @@
 //! So the full build also sorts the particles into blocks of BLOCK_CELLS³ cells (width B).
 //! While 2 h_max + 2 d_max ≤ B (d_max the largest displacement since the full build), a
 //! particle that enters i's support was, at the build, in i's block or one of its 3^D − 1
-//! neighbours; if every displacement in that neighbourhood is within s − 2δ of every
-//! displacement in i's block (boxes of displacements per block), i's list is still complete.
+//! neighbours; if every displacement in that neighbourhood is within s − δ_b − δ_N of every
+//! displacement in i's block (boxes of displacements per block; δ_b and δ_N the largest growth
+//! of a smoothing length in the block and in its neighbourhood), i's list is still complete.
 //! Only the particles of the other blocks get new lists, from the current positions and with
 //! no skin, at every step until the next full build ("dirty"), and only the particles of the
 //! dirty blocks and their neighbours are binned to find them.
@@ -97,15 +98,19 @@ pub struct NeighborList {
     block_dims: [usize; 3],
     block_start: Vec<u32>,
     block_members: Vec<u32>,
-    /// Displacement box (lo, hi) of each block's members since the last full build.
+    /// Displacement box (lo, hi) of each block's members since the last full build, and the
+    /// largest growth of their smoothing lengths (≥ 0).
     block_box: Vec<[[f64; 3]; 2]>,
+    block_grow: Vec<f64>,
     /// Blocks, and real particles, whose lists are rebuilt at every step until the next full
     /// build (see [`NeighborList::refresh`]).
     dirty_block: Vec<bool>,
     dirty: Vec<bool>,
-    /// Dirty particles now, and lists rebuilt by partial rebuilds since the full build.
+    /// Dirty particles now, lists rebuilt by partial rebuilds since the full build, and
+    /// refreshes since it (steps that kept its lists, in whole or in part).
     dirty_count: usize,
     rebuilt: usize,
+    refreshes: usize,
     /// The particles a partial rebuild bins (see [`NeighborList::rebuild_dirty`]).
     candidates: Vec<u32>,
     /// Per real particle: whether its list holds a particle of another class (body), as of the
@@ -420,6 +425,7 @@ impl NeighborList {
         if self.h_built.len() != h.len() || self.x_built.len() != D * x.len() {
             return Refresh::Full;
         }
+        self.refreshes += 1;
         let (x_built, origin) = (&self.x_built, self.origin);
         let disp = |i: usize| -> [f64; 3] {
             let mut d = [0.0; 3];
@@ -461,26 +467,36 @@ impl NeighborList {
         if self.block_start.is_empty() || 2.0 * h_max + 2.0 * d_max + slack > self.block_width {
             return Refresh::Full;
         }
-        // Displacement box of each block.
+        // Displacement box and smoothing-length growth of each block.
         let (starts, members) = (&self.block_start, &self.block_members);
-        let near = &self.near;
+        let (near, h_built) = (&self.near, &self.h_built);
         self.block_box
             .par_iter_mut()
+            .zip(&mut self.block_grow)
             .enumerate()
             .filter(|(b, _)| near.get(*b).is_none_or(|&n| n))
-            .for_each(|(b, bx)| {
+            .for_each(|(b, (bx, gr))| {
                 *bx = [[f64::INFINITY; 3], [f64::NEG_INFINITY; 3]];
+                *gr = 0.0;
                 for &i in &members[starts[b] as usize..starts[b + 1] as usize] {
-                    let d = disp(i as usize);
+                    let i = i as usize;
+                    let d = disp(i);
                     for k in 0..3 {
                         bx[0][k] = bx[0][k].min(d[k]);
                         bx[1][k] = bx[1][k].max(d[k]);
                     }
+                    *gr = gr.max(h[i] - f64::from(h_built[i]));
                 }
             });
         // A block stays clean while the farthest pair of displacements between it and its
-        // neighbourhood is below s − 2δ.
+        // neighbourhood is below s − δ_b − δ_N, δ_b the largest growth of a smoothing length
+        // in the block and δ_N in its neighbourhood: a pair (i in the block, j around it) that
+        // was at least h_i + h_j + s apart at the build is then still outside h_i + h_j. Until
+        // 2026-12-01 both were the largest growth of any particle, so that one expanding
+        // particle anywhere made every block dirty at once (the sphere–plate demo: every
+        // list rebuilt every 5–9 steps, its debris growing its smoothing lengths).
         let (dims, boxes, skin) = (self.block_dims, &self.block_box, self.skin);
+        let grows = &self.block_grow;
         let home = &self.home;
         self.dirty_block
             .par_iter_mut()
@@ -489,8 +505,9 @@ impl NeighborList {
                 if *dirty || starts[b] == starts[b + 1] || home.get(b).is_some_and(|&h| !h) {
                     return;
                 }
-                let mut union = boxes[b];
+                let (mut union, mut grow_near) = (boxes[b], grows[b]);
                 around(dims, b, |o| {
+                    grow_near = grow_near.max(grows[o]);
                     let o = &boxes[o];
                     for k in 0..3 {
                         union[0][k] = union[0][k].min(o[0][k]);
@@ -503,7 +520,7 @@ impl NeighborList {
                     let e = (own[1][k] - union[0][k]).max(union[1][k] - own[0][k]);
                     far2 += e * e;
                 }
-                *dirty = far2.sqrt() + grow + slack >= skin;
+                *dirty = far2.sqrt() + grows[b] + grow_near + slack >= skin;
             });
         let n_real = self.n_lists;
         let (starts, members) = (&self.block_start, &self.block_members);
@@ -517,9 +534,17 @@ impl NeighborList {
             }
         }
         self.dirty_count = ranks.sum(self.dirty_here as u64) as usize;
-        // Once the partial rebuilds have cost as much as a full build, a full build is cheaper
-        // (a slow flow, which then keeps its lists for many steps).
-        if self.rebuilt + self.dirty_count >= n_real {
+        // A full build costs about as much as building every list (n lists), a partial
+        // rebuild its dirty lists, and the dirty set only grows until the next full build. The
+        // cheapest run of searches, if each full build's cycle is like the last, rebuilds in
+        // full once this step's partial rebuild would cost more than the cycle's mean per step
+        // so far, the full build included: dirty·k ≥ n + rebuilt after k steps (the renewal
+        // argument for replacement: stop when the marginal cost passes the mean). A slow flow
+        // keeps its lists for many steps; an impact whose dirty set stays a fifth of the
+        // particles keeps them until a block's width forces a full build, where the old rule
+        // (a full build once the partial rebuilds had cost one, rebuilt + dirty ≥ n) rebuilt
+        // every five steps (the sphere–plate demo: 48 full searches in 200 steps).
+        if self.dirty_count * self.refreshes >= n_real + self.rebuilt {
             return Refresh::Full;
         }
         Refresh::Partial
@@ -600,6 +625,7 @@ impl NeighborList {
         self.dirty_count = 0;
         self.dirty_here = 0;
         self.rebuilt = 0;
+        self.refreshes = 0;
         self.block_start.clear();
         self.home.clear();
         self.near.clear();
@@ -648,6 +674,7 @@ impl NeighborList {
             &mut self.fill,
         );
         self.block_box.resize(count, [[0.0; 3]; 2]);
+        self.block_grow.resize(count, 0.0);
         self.dirty_block.clear();
         self.dirty_block.resize(count, false);
         if self.owned.is_some() {
@@ -1129,6 +1156,68 @@ mod tests {
         println!("60 moves: {full} full builds, {partial} partial, {lists} lists rebuilt");
         assert!(partial >= 10 && full >= 1, "{full} full, {partial} partial");
         assert!(lists < 60 * n / 2, "{lists} lists rebuilt");
+    }
+
+    /// Smoothing lengths growing in one corner (debris expanding) dirty only the blocks
+    /// within reach of the growth: a pair (i, j) can enter the support through the growth of
+    /// h_i and h_j alone, so a block stays clean while its own growth and its neighbourhood's
+    /// leave the skin unspent. A cloud four blocks long, its first block's smoothing lengths
+    /// growing by 0.4 skins a step: at the second step only that block is dirty (with one
+    /// largest growth for every block, as until 2026-12-01, every block was), and at the
+    /// third its neighbour must be too (fails, tried, with the neighbourhood's growth left
+    /// out: pairs across the two blocks' boundary are lost). Half the lists dirty at the third
+    /// step cost more than the cycle's mean: a full build there (at the fourth with the rule
+    /// before 2026-12-01, a full build once the partial rebuilds had cost one: tried).
+    #[test]
+    fn growing_smoothing_lengths_dirty_only_their_neighbourhood() {
+        let mut seed = 11u64;
+        let n = 2000;
+        let x: Vec<Vector<3>> = (0..n)
+            .map(|_| {
+                Vector::<3>::new(
+                    1.32 * rnd(&mut seed),
+                    0.33 * rnd(&mut seed),
+                    0.33 * rnd(&mut seed),
+                )
+            })
+            .collect();
+        let (mut h, skin) = (vec![0.05; n], 0.01);
+        let mut nl = NeighborList::default();
+        nl.build(&x, &h, n, skin);
+        let width = nl.block_width;
+        assert!((width - 0.33).abs() < 1e-9 && nl.block_dims == [4, 1, 1]);
+        let mut first_full = None;
+        for step in 1..=6 {
+            for (hi, p) in h.iter_mut().zip(&x) {
+                if p[0] < 0.32 {
+                    *hi += 0.4 * skin;
+                }
+            }
+            match nl.refresh(&x, &h, Ranks::SERIAL) {
+                Refresh::Full => {
+                    nl.build(&x, &h, n, skin);
+                    first_full.get_or_insert(step);
+                }
+                Refresh::Partial => nl.rebuild_dirty(&x, &h),
+                Refresh::Valid => {}
+            }
+            for (i, e) in brute(&x, &h, n).iter().enumerate() {
+                assert!(
+                    e.iter().all(|&j| nl.list(i).any(|k| k == j)),
+                    "step {step}: pair of particle {i} lost"
+                );
+            }
+            if step == 2 {
+                let dirty: Vec<usize> = (0..n).filter(|&i| nl.rebuilt_since_build(i)).collect();
+                assert!(!dirty.is_empty(), "the growing block is dirty");
+                assert!(
+                    dirty.iter().all(|&i| x[i][0] < width + 1e-3),
+                    "only the growing block is dirty: {} of {n}",
+                    dirty.len()
+                );
+            }
+        }
+        assert_eq!(first_full, Some(3));
     }
 
     /// An MPI rank's refresh and partial rebuilds read only its own particles and the members
