@@ -356,6 +356,7 @@ impl<const D: usize> Run<'_, D> {
             mean_neighbors: tally.interactions as f64 / (n as f64 * steps.max(1) as f64),
             searches: self.sim.stats.searches,
             partial_searches: self.sim.stats.partial_searches,
+            rebalances: self.sim.rebalances,
             correction_fallbacks: self.sim.stats.correction_fallbacks,
             end_time: self.sim.state.time,
             energy_error: tally.energy_dev / tally.energy_scale.max(f64::MIN_POSITIVE),

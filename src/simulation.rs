@@ -100,11 +100,22 @@ pub struct Simulation<const D: usize> {
     /// particles were reordered, each one's index before (see `receive_halo`).
     moved: Option<(Vec<Range<usize>>, Vec<usize>)>,
     /// Seconds this rank spent on its own share since the ranges were set (to balance the
-    /// next ones), and in the exchanges between ranks in all.
+    /// next ones; the full search that set them left out), and in the exchanges between ranks
+    /// in all.
     busy: f64,
     exchanging: f64,
-    /// Step of the last comparison of the ranks' loads.
+    /// Seconds this rank's last full search took, its exchanges included: what new ranges
+    /// cost (see `lagging_rank`).
+    rebuild: f64,
+    /// Steps of the last comparison of the ranks' loads, and of the last full search (when
+    /// the ranges were set).
     balanced: u64,
+    ranged: u64,
+    /// The rank whose load was worth new ranges at the last comparison since the ranges were
+    /// set (see `unbalanced`).
+    lagging: Option<usize>,
+    /// Full searches made early, to balance the ranks' loads (0 on one rank).
+    pub rebalances: u64,
 }
 
 /// The scalar state of a run in progress, beside its particles: what a checkpoint keeps.
@@ -241,8 +252,10 @@ fn blocks_of(parts: &[Range<usize>], per: usize) -> Vec<Range<usize>> {
 
 /// Real particles are put back in cell order at least this often (steps), for memory locality.
 pub const REORDER_EVERY: u64 = 50;
-/// Under MPI, the ranks compare their loads this often (steps), and take new ranges where the
-/// slowest is past this multiple of the mean (see `Simulation::unbalanced`).
+/// Under MPI, the ranks compare their loads this often (steps), and take new ranges early only
+/// where the slowest is past this multiple of the mean (the measured times scatter by a few
+/// per cent from step to step) and the time it loses pays for a full search
+/// (`lagging_rank`).
 const BALANCE_EVERY: u64 = 5;
 const IMBALANCE: f64 = 1.1;
 /// Verlet skin of the neighbour lists, as a fraction of the largest smoothing length.
@@ -336,7 +349,11 @@ impl<const D: usize> Simulation<D> {
             moved: None,
             busy: 0.0,
             exchanging: 0.0,
+            rebuild: 0.0,
             balanced: 0,
+            ranged: 0,
+            lagging: None,
+            rebalances: 0,
         })
     }
 
@@ -376,19 +393,35 @@ impl<const D: usize> Simulation<D> {
         self.ranks.size() > 1 && self.parts.len() == self.ranks.size()
     }
 
-    /// Whether the ranks' loads have drifted apart since their ranges were set: every
-    /// `BALANCE_EVERY` steps they compare their time on their own shares, and past
-    /// `IMBALANCE` (the slowest over the mean) the next search is a full one, with new ranges
-    /// (which changes no result: see `neighbors`). Always false on one rank.
+    /// Whether the ranks' loads have drifted apart since their ranges were set, far enough
+    /// that new ranges pay for the full search that makes them: every `BALANCE_EVERY` steps
+    /// (the first `BALANCE_EVERY` steps after a full search) they compare their time on their
+    /// own shares and the cost of their last full search (`lagging_rank`). If new ranges pay,
+    /// and did at the last comparison too with the same rank the slowest, this step's search
+    /// is a full one, with new ranges (which changes no result: see `neighbors`). The second
+    /// look and the blocks' rounding are for small runs, whose times per step are a few hundred
+    /// microseconds and scatter by tens of per cent, and whose ranges whole blocks cannot
+    /// balance finely: on the 2D plate of `examples/plate_2d.toml` (700 particles, 2 ranks) the
+    /// cost alone bought 344 early searches in 2000 steps, with the second look 131 in 3447,
+    /// with the rounding none. The figures are gathered, so every rank decides alike. Always
+    /// false on one rank.
     fn unbalanced(&mut self) -> bool {
-        if self.ranks.size() == 1 || self.state.step < self.balanced + BALANCE_EVERY {
+        let step = self.state.step;
+        if self.ranks.size() == 1 || step < self.balanced.max(self.ranged) + BALANCE_EVERY {
             return false;
         }
-        self.balanced = self.state.step;
+        self.balanced = step;
         let times = self.ranks.gather_each(self.busy);
-        let mean = times.iter().sum::<f64>() / times.len() as f64;
-        let slowest = times.iter().copied().fold(0.0, f64::max);
-        slowest > IMBALANCE * mean
+        let mut cost = [self.rebuild];
+        self.ranks.max_each(&mut cost);
+        let left = (self.state.last_reorder + REORDER_EVERY).saturating_sub(step);
+        // Ranges start at whole blocks: each may end up to half a block from its balance.
+        let rounding = (BLOCK / 2 * self.ranks.size()) as f64 / self.particles.n_real as f64;
+        let lagging = lagging_rank(&times, step - self.ranged, left, cost[0], rounding);
+        let early = lagging.is_some() && lagging == self.lagging;
+        self.lagging = lagging;
+        self.rebalances += u64::from(early);
+        early
     }
 
     /// Seconds spent in the exchanges between ranks so far (0 on one rank).
@@ -639,6 +672,7 @@ impl<const D: usize> Simulation<D> {
             }
         }
         let mut counts = Vec::new();
+        let full = Instant::now();
         if need == Refresh::Full && distributed {
             // Each rank has advanced only its own range since the ranges were set: before they
             // change (and the order with them), every rank takes every particle's position and
@@ -690,12 +724,18 @@ impl<const D: usize> Simulation<D> {
             self.neighbors.build(&p.x, h, p.n_real, skin);
             self.neighbors.classify(&p.body, false);
             self.stats.searches += 1;
-            self.busy += start.elapsed().as_secs_f64();
+            self.rebuild = start.elapsed().as_secs_f64();
+            self.ranged = self.state.step;
+            self.lagging = None;
         }
         if self.ranks.size() > 1 {
             let lap = Instant::now();
             self.receive_halo(need);
             self.exchanging += lap.elapsed().as_secs_f64();
+            if need == Refresh::Full {
+                // The migration and the new plans belong to the full search's cost.
+                self.rebuild = full.elapsed().as_secs_f64();
+            }
         }
         let p = &mut self.particles;
         // This rank's time on its share, without the waits in the exchanges.
@@ -1133,6 +1173,33 @@ fn rebalance(
     parts
 }
 
+/// The slowest rank, where new ranges would pay for the full search that makes them. The ranks wait for the
+/// slowest at each step's exchanges, so ranges balanced on the measured loads would save about
+/// (t_max − t_mean (1 + r)) / `steps` a step, `times` being each rank's seconds on its own
+/// share over the `steps` since the ranges were set and r the fraction of a rank's load by
+/// which its new range may still miss the balance (`rounding`: the ranges start at whole
+/// blocks); they would do so for the `left` steps until the next reordering sets new ranges
+/// anyway (at most: a full search for the lists' own sake may come sooner), against `cost`,
+/// the seconds of the slowest rank's last full search with its exchanges. Besides paying,
+/// the imbalance must pass `IMBALANCE`, above the times' scatter.
+/// The renewal rule again (see `neighbors::NeighborList::refresh`): a balance is worth
+/// buying when it earns back its price before it would come free. Until 2026-12-02 every
+/// imbalance past 1.1 forced a full search, however few steps were left before the next.
+fn lagging_rank(times: &[f64], steps: u64, left: u64, cost: f64, rounding: f64) -> Option<usize> {
+    if times.is_empty() || steps == 0 {
+        return None;
+    }
+    let mean = times.iter().sum::<f64>() / times.len() as f64;
+    // The first of the slowest, so that ties name the same rank on every rank.
+    let (rank, slowest) = times
+        .iter()
+        .copied()
+        .enumerate()
+        .fold((0, f64::MIN), |a, b| if b.1 > a.1 { b } else { a });
+    let saving = (slowest - mean * (1.0 + rounding)) / steps as f64 * left as f64;
+    (slowest > IMBALANCE * mean && saving > cost).then_some(rank)
+}
+
 /// The neighbour search radius of each particle (ghosts included): its smoothing length, or
 /// max(h, h0) when the colour contact law, which acts over the reference support, is in use
 /// (`colour`; the radii are then written into `out` and returned from it). Without the colour
@@ -1154,6 +1221,51 @@ fn search_radii<'a, const D: usize>(
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// New ranges are bought only when the time the imbalance loses before the next reordering
+    /// pays for the full search, and never for an imbalance within the times' scatter.
+    #[test]
+    fn rebalancing_pays_for_its_search() {
+        // 2 ranks, 1.0 and 1.3 s over 10 steps: 0.15 s lost a step against the mean.
+        let times = [1.0, 1.3];
+        assert_eq!(
+            lagging_rank(&times, 10, 40, 0.5, 0.0),
+            Some(1),
+            "0.6 s saved for 0.5"
+        );
+        assert_eq!(
+            lagging_rank(&times, 10, 20, 0.5, 0.0),
+            None,
+            "0.3 s saved for 0.5"
+        );
+        assert_eq!(
+            lagging_rank(&times, 10, 0, 0.0, 0.0),
+            None,
+            "nothing left to save"
+        );
+        let long = lagging_rank(&times, 40, 40, 0.5, 0.0);
+        assert_eq!(long, None, "the same loss over 40 steps");
+        // Whole blocks may leave 10 % of a rank's load: 0.0035 s a step to gain, 0.14 s over
+        // 40 steps, 0.7 s over 200.
+        assert_eq!(lagging_rank(&times, 10, 40, 0.5, 0.1), None);
+        assert_eq!(lagging_rank(&times, 10, 200, 0.5, 0.1), Some(1));
+        // 3 % over the mean: within the scatter, however cheap the search.
+        assert_eq!(lagging_rank(&[1.0, 1.06], 10, 50, 0.0, 0.0), None);
+        let three = [1.5, 1.0, 1.0];
+        assert_eq!(
+            lagging_rank(&three, 5, 45, 0.7, 0.0),
+            Some(0),
+            "1.5 / 1.167 over 5 steps"
+        );
+        let two = [1.0, 1.5, 1.5];
+        assert_eq!(
+            lagging_rank(&two, 5, 45, 0.1, 0.0),
+            Some(1),
+            "the first of two"
+        );
+        assert_eq!(lagging_rank(&[], 5, 45, 0.0, 0.0), None);
+        assert_eq!(lagging_rank(&times, 0, 45, 0.0, 0.0), None);
+    }
 
     /// The ranks' ranges start at multiples of the sums' block, nearest the balanced split, so
     /// that each rank sums whole blocks of its own; a range too short for a block is empty.

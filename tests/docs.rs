@@ -172,6 +172,7 @@ fn every_output_column_field_and_key_is_documented() {
         mean_neighbors: 0.0,
         searches: 0,
         partial_searches: 0,
+        rebalances: 0,
         correction_fallbacks: 0,
         end_time: 0.0,
         energy_error: 0.0,

@@ -21,6 +21,10 @@ pub struct Summary {
     /// Full neighbour searches, and steps with a partial rebuild (see `neighbors`).
     pub searches: u64,
     pub partial_searches: u64,
+    /// Under MPI: full searches made early to balance the ranks' loads (counted since this
+    /// process started, so a resumed run's from its resume; 0 on one rank).
+    #[serde(default)]
+    pub rebalances: u64,
     /// CN-SPH: particle-steps that kept the uncorrected gradient (0 in conventional SPH).
     pub correction_fallbacks: u64,
     /// Simulated time reached (s).
