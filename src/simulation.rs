@@ -720,11 +720,9 @@ impl<const D: usize> Simulation<D> {
             let skin = SKIN * h_max;
             self.ghosts.rebuild(p, &self.symmetry, 2.0 * h_max + skin);
             let h = search_radii(p, wide, &mut self.h_search);
-            let start = Instant::now();
             self.neighbors.build(&p.x, h, p.n_real, skin);
             self.neighbors.classify(&p.body, false);
             self.stats.searches += 1;
-            self.rebuild = start.elapsed().as_secs_f64();
             self.ranged = self.state.step;
             self.lagging = None;
         }
@@ -733,7 +731,8 @@ impl<const D: usize> Simulation<D> {
             self.receive_halo(need);
             self.exchanging += lap.elapsed().as_secs_f64();
             if need == Refresh::Full {
-                // The migration and the new plans belong to the full search's cost.
+                // The search with its exchanges, the migration and the new plans: what new
+                // ranges cost.
                 self.rebuild = full.elapsed().as_secs_f64();
             }
         }
@@ -1173,16 +1172,16 @@ fn rebalance(
     parts
 }
 
-/// The slowest rank, where new ranges would pay for the full search that makes them. The ranks wait for the
-/// slowest at each step's exchanges, so ranges balanced on the measured loads would save about
-/// (t_max − t_mean (1 + r)) / `steps` a step, `times` being each rank's seconds on its own
-/// share over the `steps` since the ranges were set and r the fraction of a rank's load by
-/// which its new range may still miss the balance (`rounding`: the ranges start at whole
-/// blocks); they would do so for the `left` steps until the next reordering sets new ranges
-/// anyway (at most: a full search for the lists' own sake may come sooner), against `cost`,
-/// the seconds of the slowest rank's last full search with its exchanges. Besides paying,
-/// the imbalance must pass `IMBALANCE`, above the times' scatter.
-/// The renewal rule again (see `neighbors::NeighborList::refresh`): a balance is worth
+/// The slowest rank, where new ranges would pay for the full search that makes them. The
+/// ranks wait for the slowest at each step's exchanges, so ranges balanced on the measured
+/// loads would save about (t_max − t_mean (1 + r)) / `steps` a step, `times` being each rank's
+/// seconds on its own share over the `steps` since the ranges were set and r the fraction of
+/// a rank's load by which its new range may still miss the balance (`rounding`: the ranges
+/// start at whole blocks); they would do so for the `left` steps until the next reordering
+/// sets new ranges anyway (at most: a full search for the lists' own sake may come sooner),
+/// against `cost`, the seconds of the slowest rank's last full search with its exchanges.
+/// Besides paying, the imbalance must pass `IMBALANCE`, above the times' scatter. The renewal
+/// rule again (see `neighbors::NeighborList::refresh`): a balance is worth
 /// buying when it earns back its price before it would come free. Until 2026-12-02 every
 /// imbalance past 1.1 forced a full search, however few steps were left before the next.
 fn lagging_rank(times: &[f64], steps: u64, left: u64, cost: f64, rounding: f64) -> Option<usize> {
