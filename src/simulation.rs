@@ -665,9 +665,13 @@ impl<const D: usize> Simulation<D> {
             }
             if need == Refresh::Partial {
                 let start = Instant::now();
-                self.neighbors.rebuild_dirty(&p.x, h);
-                self.neighbors.classify(&p.body, true);
-                self.stats.partial_searches += 1;
+                if self.neighbors.rebuild_dirty(&p.x, h) {
+                    self.neighbors.classify(&p.body, true);
+                    self.stats.partial_searches += 1;
+                } else {
+                    // The last partial rebuild's lists still hold (the same on every rank).
+                    need = Refresh::Valid;
+                }
                 self.busy += start.elapsed().as_secs_f64();
             }
         }
