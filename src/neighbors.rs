@@ -126,8 +126,9 @@ pub struct NeighborList {
     /// rebuilt at the next refresh), the dirty count it rebuilt, the positions and smoothing
     /// lengths of its candidates (in their order, block by block) and where each block's
     /// members start among them (u32::MAX: not a candidate's block), partial rebuilds since
-    /// the full build and the refresh of the first. While no list turns dirty and no pair around the rebuilt ones
-    /// can have crossed that skin since, the rebuilt lists are kept (`keep_dirty`).
+    /// the full build and the refresh of the first. While no list turns dirty and no pair
+    /// around the rebuilt ones can have crossed that skin since, the rebuilt lists are kept
+    /// (`keep_dirty`).
     rescan_skin: f64,
     rescanned: usize,
     rescan_x: Vec<[f64; 3]>,
