@@ -1268,14 +1268,8 @@ mod tests {
     #[test]
     fn partial_rebuilds_keep_lists_complete() {
         let mut seed = 3u64;
-        let mut x: Vec<Vector<3>> = (0..1500)
-            .map(|_| Vector::<3>::new(rnd(&mut seed), rnd(&mut seed), rnd(&mut seed)))
-            .collect();
-        let target = x.len();
-        x.extend((0..300).map(|_| {
-            Vector::<3>::new(1.04, 0.35, 0.35)
-                + Vector::<3>::new(rnd(&mut seed), rnd(&mut seed), rnd(&mut seed)) * 0.3
-        }));
+        let target = 1500;
+        let mut x = clouds(target, [1.04, 0.35, 0.35], 0.3, &mut seed);
         let n = x.len();
         let h = vec![0.05; n];
         let skin = 0.01;
@@ -1283,17 +1277,7 @@ mod tests {
         nl.build(&x, &h, n, skin);
         let (mut full, mut partial, mut lists) = (0, 0, 0);
         for step in 0..60 {
-            for (i, p) in x.iter_mut().enumerate() {
-                let jitter = Vector::<3>::new(
-                    rnd(&mut seed) - 0.5,
-                    rnd(&mut seed) - 0.5,
-                    rnd(&mut seed) - 0.5,
-                ) * 2e-4;
-                *p += jitter;
-                if i >= target {
-                    p[0] -= 0.004;
-                }
-            }
+            fly(&mut x, target, 0.004, 2e-4, &mut seed);
             match nl.refresh(&x, &h, Ranks::SERIAL) {
                 Refresh::Full => {
                     nl.build(&x, &h, n, skin);
@@ -1308,16 +1292,43 @@ mod tests {
                 }
                 Refresh::Valid => {}
             }
-            for (i, e) in brute(&x, &h, n).iter().enumerate() {
-                assert!(
-                    e.iter().all(|&j| nl.list(i).any(|k| k == j)),
-                    "step {step}: pair of particle {i} lost"
-                );
-            }
+            assert_complete(&nl, &x, &h, step);
         }
         println!("60 moves: {full} full builds, {partial} partial, {lists} lists rebuilt");
         assert!(partial >= 10 && full >= 1, "{full} full, {partial} partial");
         assert!(lists < 60 * n / 2, "{lists} lists rebuilt");
+    }
+
+    /// Every pair within the support (by brute force) is in the lists.
+    fn assert_complete(nl: &NeighborList, x: &[Vector<3>], h: &[f64], step: usize) {
+        for (i, e) in brute(x, h, x.len()).iter().enumerate() {
+            assert!(
+                e.iter().all(|&j| nl.list(i).any(|k| k == j)),
+                "step {step}: pair of particle {i} lost"
+            );
+        }
+    }
+
+    /// `target` particles at random in the unit cube, then 300 in a cube of side `size` at
+    /// `corner`.
+    fn clouds(target: usize, corner: [f64; 3], size: f64, seed: &mut u64) -> Vec<Vector<3>> {
+        let mut at = |c: [f64; 3], a: f64| {
+            Vector::<3>::from(c) + Vector::<3>::new(rnd(seed), rnd(seed), rnd(seed)) * a
+        };
+        let mut x: Vec<Vector<3>> = (0..target).map(|_| at([0.0; 3], 1.0)).collect();
+        x.extend((0..300).map(|_| at(corner, size)));
+        x
+    }
+
+    /// Jitter every particle by up to `jitter` / 2 along each axis, and move those from
+    /// `from` on by `speed` towards −x.
+    fn fly(x: &mut [Vector<3>], from: usize, speed: f64, jitter: f64, seed: &mut u64) {
+        for (i, p) in x.iter_mut().enumerate() {
+            *p += Vector::<3>::new(rnd(seed) - 0.5, rnd(seed) - 0.5, rnd(seed) - 0.5) * jitter;
+            if i >= from {
+                p[0] -= speed;
+            }
+        }
     }
 
     /// A striker that stops: a small cloud flies into a larger one by more than the skin in a
@@ -1328,14 +1339,8 @@ mod tests {
     #[test]
     fn partial_rebuilds_keep_their_lists_while_they_hold() {
         let mut seed = 5u64;
-        let mut x: Vec<Vector<3>> = (0..6000)
-            .map(|_| Vector::<3>::new(rnd(&mut seed), rnd(&mut seed), rnd(&mut seed)))
-            .collect();
-        let target = x.len();
-        x.extend((0..300).map(|_| {
-            Vector::<3>::new(1.01, 0.4, 0.4)
-                + Vector::<3>::new(rnd(&mut seed), rnd(&mut seed), rnd(&mut seed)) * 0.15
-        }));
+        let target = 6000;
+        let mut x = clouds(target, [1.01, 0.4, 0.4], 0.15, &mut seed);
         let n = x.len();
         let h = vec![0.03; n];
         let skin = 0.006;
@@ -1344,17 +1349,7 @@ mod tests {
         let (mut full, mut rebuilt, mut kept) = (0, 0, 0);
         for step in 0..40 {
             let speed = if step < 4 { 0.0024 } else { 0.00024 };
-            for (i, p) in x.iter_mut().enumerate() {
-                let jitter = Vector::<3>::new(
-                    rnd(&mut seed) - 0.5,
-                    rnd(&mut seed) - 0.5,
-                    rnd(&mut seed) - 0.5,
-                ) * 2e-5;
-                *p += jitter;
-                if i >= target {
-                    p[0] -= speed;
-                }
-            }
+            fly(&mut x, target, speed, 2e-5, &mut seed);
             match nl.refresh(&x, &h, Ranks::SERIAL) {
                 Refresh::Full => {
                     nl.build(&x, &h, n, skin);
@@ -1365,12 +1360,7 @@ mod tests {
                 Refresh::Partial => {}
                 Refresh::Valid => {}
             }
-            for (i, e) in brute(&x, &h, n).iter().enumerate() {
-                assert!(
-                    e.iter().all(|&j| nl.list(i).any(|k| k == j)),
-                    "step {step}: pair of particle {i} lost"
-                );
-            }
+            assert_complete(&nl, &x, &h, step);
         }
         println!("40 moves: {full} full builds, {rebuilt} partial rebuilds, {kept} kept");
         assert!(rebuilt >= 2 && kept >= 10, "{rebuilt} rebuilt, {kept} kept");
@@ -1421,12 +1411,7 @@ mod tests {
                 }
                 Refresh::Valid => {}
             }
-            for (i, e) in brute(&x, &h, n).iter().enumerate() {
-                assert!(
-                    e.iter().all(|&j| nl.list(i).any(|k| k == j)),
-                    "step {step}: pair of particle {i} lost"
-                );
-            }
+            assert_complete(&nl, &x, &h, step);
             if step == 2 {
                 let dirty: Vec<usize> = (0..n).filter(|&i| nl.rebuilt_since_build(i)).collect();
                 assert!(!dirty.is_empty(), "the growing block is dirty");
