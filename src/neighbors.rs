@@ -134,6 +134,8 @@ pub struct NeighborList {
     rescan_x: Vec<[f64; 3]>,
     rescan_h: Vec<f64>,
     rescan_at: Vec<u32>,
+    /// The dirty blocks whose lists the last partial rebuild built here.
+    rescanned_blocks: Vec<u32>,
     rescans: usize,
     first_rescan: usize,
     keep_dirty: bool,
@@ -509,17 +511,8 @@ impl NeighborList {
             .enumerate()
             .filter(|(b, _)| near.get(*b).is_none_or(|&n| n))
             .for_each(|(b, (bx, gr))| {
-                *bx = [[f64::INFINITY; 3], [f64::NEG_INFINITY; 3]];
-                *gr = 0.0;
-                for &i in &members[starts[b] as usize..starts[b + 1] as usize] {
-                    let i = i as usize;
-                    let d = disp(i);
-                    for k in 0..3 {
-                        bx[0][k] = bx[0][k].min(d[k]);
-                        bx[1][k] = bx[1][k].max(d[k]);
-                    }
-                    *gr = gr.max(h[i] - f64::from(h_built[i]));
-                }
+                let list = &members[starts[b] as usize..starts[b + 1] as usize];
+                (*bx, *gr) = displacement_box(list, |_, i| (disp(i), h[i] - f64::from(h_built[i])));
             });
         // A block stays clean while the farthest pair of displacements between it and its
         // neighbourhood is below s − δ_b − δ_N, δ_b the largest growth of a smoothing length
@@ -538,22 +531,7 @@ impl NeighborList {
                 if *dirty || starts[b] == starts[b + 1] || home.get(b).is_some_and(|&h| !h) {
                     return;
                 }
-                let (mut union, mut grow_near) = (boxes[b], grows[b]);
-                around(dims, b, |o| {
-                    grow_near = grow_near.max(grows[o]);
-                    let o = &boxes[o];
-                    for k in 0..3 {
-                        union[0][k] = union[0][k].min(o[0][k]);
-                        union[1][k] = union[1][k].max(o[1][k]);
-                    }
-                });
-                let own = &boxes[b];
-                let mut far2 = 0.0;
-                for k in 0..3 {
-                    let e = (own[1][k] - union[0][k]).max(union[1][k] - own[0][k]);
-                    far2 += e * e;
-                }
-                *dirty = far2.sqrt() + grows[b] + grow_near + slack >= skin;
+                *dirty = closing(dims, b, boxes, grows) + slack >= skin;
             });
         let n_real = self.n_lists;
         let (starts, members) = (&self.block_start, &self.block_members);
@@ -604,61 +582,35 @@ impl NeighborList {
         Refresh::Partial
     }
 
-    /// Whether a pair around the lists of the last partial rebuild (those of the dirty blocks
-    /// built here) may have entered the support since: the farthest pair of displacements
-    /// since that rebuild between such a block and its neighbourhood, with the largest growth
-    /// of a smoothing length in each, at or past the rebuild's skin.
+    /// Whether a pair around the lists of the last partial rebuild (those of its blocks,
+    /// `rescanned_blocks`) may have entered the support since: the farthest pair of
+    /// displacements since that rebuild between such a block and its neighbourhood, with the
+    /// largest growth of a smoothing length in each, at or past the rebuild's skin.
     fn rescanned_stale<const D: usize>(&self, x: &[Vector<D>], h: &[f64]) -> bool {
         let (starts, members, at) = (&self.block_start, &self.block_members, &self.rescan_at);
         let (rx, rh) = (&self.rescan_x, &self.rescan_h);
         // Displacement box and growth of each candidate block since the rebuild.
-        let boxes: Vec<([[f64; 3]; 2], f64)> = (0..at.len())
+        let (boxes, grows): (Vec<_>, Vec<_>) = (0..at.len())
             .into_par_iter()
             .map(|b| {
-                let mut bx = [[f64::INFINITY; 3], [f64::NEG_INFINITY; 3]];
-                let mut gr = 0.0_f64;
-                let list = &members[starts[b] as usize..starts[b + 1] as usize];
-                if at[b] == u32::MAX || list.is_empty() {
-                    return (bx, gr);
-                }
-                // Unused axes (z in 2D) do not move.
-                bx[0][D..].fill(0.0);
-                bx[1][D..].fill(0.0);
+                let list = match at[b] {
+                    u32::MAX => &[][..],
+                    _ => &members[starts[b] as usize..starts[b + 1] as usize],
+                };
                 let base = at[b] as usize;
-                for (k, &i) in list.iter().enumerate() {
-                    let i = i as usize;
+                displacement_box(list, |k, i| {
+                    let mut d = [0.0; 3];
                     for a in 0..D {
-                        let d = x[i][a] - rx[base + k][a];
-                        bx[0][a] = bx[0][a].min(d);
-                        bx[1][a] = bx[1][a].max(d);
+                        d[a] = x[i][a] - rx[base + k][a];
                     }
-                    gr = gr.max(h[i] - rh[base + k]);
-                }
-                (bx, gr)
+                    (d, h[i] - rh[base + k])
+                })
             })
-            .collect();
+            .unzip();
         let (dims, slack, skin) = (self.block_dims, self.slack, self.rescan_skin);
-        (0..at.len()).into_par_iter().any(|b| {
-            if !self.rebuilt_block(b) {
-                return false;
-            }
-            let (own, grow) = boxes[b];
-            let (mut union, mut grow_near) = (own, grow);
-            around(dims, b, |o| {
-                let (bx, g) = &boxes[o];
-                grow_near = grow_near.max(*g);
-                for k in 0..3 {
-                    union[0][k] = union[0][k].min(bx[0][k]);
-                    union[1][k] = union[1][k].max(bx[1][k]);
-                }
-            });
-            let mut far2 = 0.0;
-            for k in 0..3 {
-                let e = (own[1][k] - union[0][k]).max(union[1][k] - own[0][k]);
-                far2 += e * e;
-            }
-            far2.sqrt() + grow + grow_near + slack >= skin
-        })
+        self.rescanned_blocks
+            .par_iter()
+            .any(|&b| closing(dims, b as usize, &boxes, &grows) + slack >= skin)
     }
 
     /// Whether block `b` is dirty and holds a dirty particle whose list is built here.
@@ -751,9 +703,11 @@ impl NeighborList {
         out.clear();
         let (dims, starts, members) = (self.block_dims, &self.block_start, &self.block_members);
         let mut near = vec![false; self.dirty_block.len()];
+        self.rescanned_blocks.clear();
         for b in 0..self.dirty_block.len() {
             if self.rebuilt_block(b) {
                 around(dims, b, |o| near[o] = true);
+                self.rescanned_blocks.push(b as u32);
             }
         }
         self.rescan_at.clear();
@@ -1107,6 +1061,49 @@ fn around(dims: [usize; 3], b: usize, mut f: impl FnMut(usize)) {
             }
         }
     }
+}
+
+/// The box (lowest and highest, per axis) of the displacements of `members` and the largest
+/// growth of their smoothing lengths (at least 0), `moved(k, i)` giving both for the k-th
+/// member, particle i (unused axes: 0).
+fn displacement_box(
+    members: &[u32],
+    moved: impl Fn(usize, usize) -> ([f64; 3], f64),
+) -> ([[f64; 3]; 2], f64) {
+    let mut bx = [[f64::INFINITY; 3], [f64::NEG_INFINITY; 3]];
+    let mut grow = 0.0_f64;
+    for (k, &i) in members.iter().enumerate() {
+        let (d, g) = moved(k, i as usize);
+        for a in 0..3 {
+            bx[0][a] = bx[0][a].min(d[a]);
+            bx[1][a] = bx[1][a].max(d[a]);
+        }
+        grow = grow.max(g);
+    }
+    (bx, grow)
+}
+
+/// How far a pair between block `b` and its neighbourhood may have closed since the positions
+/// its boxes are measured from: the farthest pair of displacements between the block's box
+/// and the union of its 3^D neighbourhood's, plus the largest growth of a smoothing length in
+/// the block and in the neighbourhood (see `NeighborList::refresh`).
+fn closing(dims: [usize; 3], b: usize, boxes: &[[[f64; 3]; 2]], grows: &[f64]) -> f64 {
+    let (mut union, mut grow_near) = (boxes[b], grows[b]);
+    around(dims, b, |o| {
+        grow_near = grow_near.max(grows[o]);
+        let o = &boxes[o];
+        for k in 0..3 {
+            union[0][k] = union[0][k].min(o[0][k]);
+            union[1][k] = union[1][k].max(o[1][k]);
+        }
+    });
+    let own = &boxes[b];
+    let mut far2 = 0.0;
+    for k in 0..3 {
+        let e = (own[1][k] - union[0][k]).max(union[1][k] - own[0][k]);
+        far2 += e * e;
+    }
+    far2.sqrt() + grows[b] + grow_near
 }
 
 /// A bound on the error of a length of at most `magnitude` kept in single precision (round to
