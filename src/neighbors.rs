@@ -195,9 +195,33 @@ struct ListChunk {
 
 impl ListChunk {
     fn list(&self, k: usize) -> Listed<'_> {
-        let start = if k == 0 { 0 } else { self.ends[k - 1] as usize };
-        Listed::new(&self.words[start..self.ends[k] as usize])
+        Listed::new(self.packed(k))
     }
+
+    /// Particle k's list as packed.
+    fn packed(&self, k: usize) -> &[u16] {
+        let start = if k == 0 { 0 } else { self.ends[k - 1] as usize };
+        &self.words[start..self.ends[k] as usize]
+    }
+}
+
+/// The first and the last entry below `n` of a packed list ([`pack`]), if any: a list is
+/// increasing, so they are the first entry and the last of the segments' entries below n.
+fn real_span(packed: &[u16], n: usize) -> Option<(u32, u32)> {
+    let below = |j: u32| (j as usize) < n;
+    let mut span = None;
+    for (base, offsets) in Listed::new(packed).segments() {
+        let inside = offsets.partition_point(|&o| below(base + u32::from(o)));
+        if inside == 0 {
+            break;
+        }
+        let first = span.map_or(base + u32::from(offsets[0]), |(a, _)| a);
+        span = Some((first, base + u32::from(offsets[inside - 1])));
+        if inside < offsets.len() {
+            break;
+        }
+    }
+    span
 }
 
 /// Append `list` (increasing indices) packed: in segments of entries within 2^16 of the
@@ -935,19 +959,27 @@ impl NeighborList {
                 ends.clear();
                 let mut named = 0..0;
                 for (k, i) in range.enumerate() {
-                    if dirty_only && !dirty[i] {
-                        chunk.list(k).unpack_into(list);
+                    let span = if dirty_only && !dirty[i] {
+                        // A clean list is copied as it is packed (packing is canonical, so
+                        // unpacking and packing it again gave the same words): in the
+                        // sphere–plate demo two clean lists share the chunks of each dirty
+                        // one, and copying them took the partial rebuilds' scans from 0.196 /
+                        // 0.211 s to 0.183 / 0.200 s over 30 steps (2026-12-02).
+                        let packed = chunk.packed(k);
+                        words.extend_from_slice(packed);
+                        real_span(packed, n_lists)
                     } else {
                         list.clear();
                         search(i, list);
                         // Canonical order (see the module doc); cell runs are nearly sorted
                         // already.
                         list.sort_unstable();
-                    }
-                    pack(list, words);
+                        pack(list, words);
+                        let real = &list[..list.partition_point(|&j| (j as usize) < n_lists)];
+                        real.first().zip(real.last()).map(|(&a, &b)| (a, b))
+                    };
                     ends.push(words.len() as u32);
-                    let real = &list[..list.partition_point(|&j| (j as usize) < n_lists)];
-                    if let (Some(&a), Some(&b)) = (real.first(), real.last()) {
+                    if let Some((a, b)) = span {
                         let (a, b) = (a as usize, b as usize + 1);
                         named = if named.is_empty() {
                             a..b
@@ -1198,6 +1230,7 @@ mod tests {
             steps in proptest::collection::vec((1u32..70_000, 0u32..4), 0..300),
             first in 0u32..3_000_000,
             long in proptest::bool::ANY,
+            cut in 0u32..6_000_000,
         ) {
             let mut list = Vec::new();
             let mut j = first;
@@ -1222,6 +1255,11 @@ mod tests {
                 .flat_map(|(base, offsets)| offsets.iter().map(move |&o| base + u32::from(o)))
                 .collect();
             proptest::prop_assert_eq!(&by_segment, &list);
+            // The first and last entries below a cut (the real particles of a list that also
+            // names ghosts), read off the packed words.
+            let below: Vec<u32> = list.iter().copied().filter(|&j| j < cut).collect();
+            let span = below.first().zip(below.last()).map(|(&a, &b)| (a, b));
+            proptest::prop_assert_eq!(real_span(&words, cut as usize), span);
         }
     }
 
