@@ -90,10 +90,11 @@ pub fn estimated_first_step(case: &Case) -> (f64, usize) {
 
 /// Validate a case and describe it (see the module doc).
 pub fn check(case: &Case) -> Result<String> {
+    let planes = crate::setup::symmetry_planes(case);
     let estimated: Vec<f64> = case
         .bodies
         .iter()
-        .map(|b| estimate_particles(&b.shape, b.spacing, case.dimension))
+        .map(|b| estimate_particles(&b.shape, b.spacing, case.dimension, &planes))
         .collect();
     let total: f64 = estimated.iter().sum();
     let (dt, body) = estimated_first_step(case);

@@ -246,10 +246,11 @@ fn mutated_decks_give_clean_errors_or_results() {
                 continue;
             }
         };
+        let planes = strike::setup::symmetry_planes(&case);
         let particles: f64 = case
             .bodies
             .iter()
-            .map(|b| estimate_particles(&b.shape, b.spacing, case.dimension))
+            .map(|b| estimate_particles(&b.shape, b.spacing, case.dimension, &planes))
             .sum();
         if particles > RUN_LIMIT {
             tally.too_large += 1;

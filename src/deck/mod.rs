@@ -42,8 +42,23 @@ pub fn parse(text: &str, file: &str) -> Result<Case> {
     ctx.build(&deck, available_memory())
 }
 
-/// Expected number of particles of a body: the shape's volume (area in 2D) over spacing^D.
-pub fn estimate_particles(shape: &Shape, spacing: f64, dimension: usize) -> f64 {
+/// Expected number of particles of a body: its volume (area in 2D) on the model's side of the
+/// symmetry planes `planes` ([`crate::setup::symmetry_planes`]) over spacing^D.
+pub fn estimate_particles(
+    shape: &Shape,
+    spacing: f64,
+    dimension: usize,
+    planes: &[crate::boundary::Plane],
+) -> f64 {
+    let share = match dimension {
+        2 => crate::setup::shapes::model_share::<2>(shape, planes),
+        _ => crate::setup::shapes::model_share::<3>(shape, planes),
+    };
+    share * whole_shape_particles(shape, spacing, dimension)
+}
+
+/// The whole shape's volume (area in 2D) over spacing^D.
+fn whole_shape_particles(shape: &Shape, spacing: f64, dimension: usize) -> f64 {
     use std::f64::consts::PI;
     let two_d = dimension == 2;
     let measure = match shape {
@@ -702,12 +717,13 @@ impl Ctx<'_> {
                 motion,
             });
         }
-        let corrected = simulation.formulation == Formulation::Corrected;
-        self.check_memory(raw_bodies, &bodies, (dimension, corrected), memory)?;
-
-        let interactions = self.interactions(deck.interaction.as_deref(), &bodies)?;
         let symmetry =
             self.symmetry((deck.symmetry.as_deref(), deck.wall.as_deref()), dimension)?;
+        let corrected = simulation.formulation == Formulation::Corrected;
+        let planes = crate::setup::planes_of(&bodies, &symmetry);
+        self.check_memory(raw_bodies, &bodies, &planes, (dimension, corrected), memory)?;
+
+        let interactions = self.interactions(deck.interaction.as_deref(), &bodies)?;
         let output = self.output(deck.output.as_ref(), simulation.end_time)?;
 
         Ok(Case {
@@ -1204,12 +1220,13 @@ impl Ctx<'_> {
         &self,
         raw_bodies: &[raw::Located<raw::Body>],
         bodies: &[BodySpec],
+        planes: &[crate::boundary::Plane],
         (dim, corrected): (usize, bool),
         memory: Option<f64>,
     ) -> Result<()> {
         let counts: Vec<f64> = bodies
             .iter()
-            .map(|b| estimate_particles(&b.shape, b.spacing, dim))
+            .map(|b| estimate_particles(&b.shape, b.spacing, dim, planes))
             .collect();
         let total: f64 = counts.iter().sum();
         let per = crate::particles::estimated_bytes_per_particle(dim, corrected) as f64;

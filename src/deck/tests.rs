@@ -471,12 +471,12 @@ fn particle_estimates() {
         max: [1.0, 2.0, 3.0],
     };
     assert_relative_eq!(
-        estimate_particles(&cube, 0.1, 3),
+        estimate_particles(&cube, 0.1, 3, &[]),
         6000.0,
         max_relative = 1e-12
     );
     assert_relative_eq!(
-        estimate_particles(&cube, 0.1, 2),
+        estimate_particles(&cube, 0.1, 2, &[]),
         200.0,
         max_relative = 1e-12
     );
@@ -485,7 +485,7 @@ fn particle_estimates() {
         radius: 1.0,
     };
     assert_relative_eq!(
-        estimate_particles(&disc, 0.1, 2),
+        estimate_particles(&disc, 0.1, 2, &[]),
         std::f64::consts::PI * 100.0,
         max_relative = 1e-12
     );
@@ -495,7 +495,7 @@ fn particle_estimates() {
         outer_radius: 0.04,
     };
     assert_relative_eq!(
-        estimate_particles(&ring, 1e-3, 2),
+        estimate_particles(&ring, 1e-3, 2, &[]),
         std::f64::consts::PI * 700.0,
         max_relative = 1e-9
     );
@@ -512,7 +512,8 @@ fn memory_check_names_the_largest_body_and_a_spacing_that_fits() {
         text: &deck,
         file: "x.toml",
     };
-    // 1 GiB: the rod at 1e-6 would need 1.57e9 particles.
+    // 1 GiB: the rod at 1e-6 would need 3.9e8 particles (a quarter of its 1.57e9, on the
+    // model's side of the deck's two symmetry planes).
     let err = ctx.build(&raw, Some(1024.0f64.powi(3))).unwrap_err();
     let Error::Deck {
         key,
@@ -536,14 +537,16 @@ fn memory_check_names_the_largest_body_and_a_spacing_that_fits() {
         .and_then(|w| w.parse().ok())
         .unwrap_or_else(|| panic!("{help}"));
     let case = parse(DECK_3D, "x.toml").unwrap();
+    // The quarter model's bodies, on the model's side of its two symmetry planes.
+    let planes = crate::setup::symmetry_planes(&case);
     let others: f64 = case
         .bodies
         .iter()
         .enumerate()
         .filter(|(i, _)| *i != 2)
-        .map(|(_, b)| estimate_particles(&b.shape, b.spacing, 3))
+        .map(|(_, b)| estimate_particles(&b.shape, b.spacing, 3, &planes))
         .sum();
-    let rod = estimate_particles(&case.bodies[2].shape, s, 3);
+    let rod = estimate_particles(&case.bodies[2].shape, s, 3, &planes);
     let per = crate::particles::estimated_bytes_per_particle(3, false) as f64;
     assert!((others + rod) * per <= 1024.0f64.powi(3), "{s}");
     // Unknown memory: no memory check, but the u32 particle numbering still applies.
@@ -660,4 +663,36 @@ fn tables_without_headers() {
         panic!()
     };
     assert_eq!((key.as_str(), location.line), ("simulation.dimensio", 2));
+}
+
+/// The particle count estimated from the deck alone (`check` beyond a million particles, and
+/// the memory check) counts only the model's side of the symmetry planes, as the set-up fills
+/// it: the paper's quarter-model demo, and a box cut off its centre (a quarter of it beyond
+/// the plane). Counting whole shapes put the demo at four times its particles.
+#[test]
+fn estimated_particles_are_the_model_side_of_the_symmetry_planes() {
+    let count = |text: &str| {
+        let case = parse(text, "x.toml").unwrap();
+        let planes = crate::setup::symmetry_planes(&case);
+        let estimated: f64 = case
+            .bodies
+            .iter()
+            .map(|b| estimate_particles(&b.shape, b.spacing, case.dimension, &planes))
+            .sum();
+        let (p, _) = crate::setup::build::<3>(&case).unwrap();
+        (estimated, p.len() as f64)
+    };
+    let (estimated, made) = count(include_str!("../../examples/sphere_plate.toml"));
+    assert_eq!(made, 47_812.0);
+    assert!(
+        (estimated / made - 1.0).abs() < 0.02,
+        "{estimated} for {made}"
+    );
+    let cut = "[simulation]\ndimension = 3\nend_time = 1e-6\n[materials.al]\nlibrary = \"al_6061_t6\"\n[[body]]\nname = \"b\"\nmaterial = \"al\"\nspacing = 1e-4\nshape = { type = \"box\", min = [-1e-3, 0.0, 0.0], max = [3e-3, 1e-3, 1e-3] }\n[[symmetry]]\naxis = \"x\"\n";
+    let (estimated, made) = count(cut);
+    assert_eq!(made, 3000.0);
+    assert!(
+        (estimated / made - 1.0).abs() < 0.02,
+        "{estimated} for {made}"
+    );
 }

@@ -4,7 +4,9 @@ pub mod mesh;
 pub mod shapes;
 
 use crate::boundary::Plane;
-use crate::case::{BodySpec, Case, ContactLaw, EosSpec, InteractionKind, KernelKind, Motion};
+use crate::case::{
+    BodySpec, Case, ContactLaw, EosSpec, InteractionKind, KernelKind, Motion, SymmetryPlane,
+};
 use crate::contact::colour::ColourLaw;
 use crate::contact::{self, ContactParams};
 use crate::error::{DeckLocation, Error, Result};
@@ -148,16 +150,21 @@ pub fn build<const D: usize>(case: &Case) -> Result<(Particles<D>, Model<D>)> {
 /// bounding boxes (the positive side when that centre lies on the plane, as for a sphere cut
 /// in quarters).
 pub fn symmetry_planes(case: &Case) -> Vec<Plane> {
+    planes_of(&case.bodies, &case.symmetry)
+}
+
+/// [`symmetry_planes`] of these bodies and planes (wall images numbered after the bodies).
+pub fn planes_of(bodies: &[BodySpec], symmetry: &[SymmetryPlane]) -> Vec<Plane> {
     let mut lo = [f64::INFINITY; 3];
     let mut hi = [f64::NEG_INFINITY; 3];
-    for b in &case.bodies {
+    for b in bodies {
         let (l, h) = shapes::bounding_box(&b.shape);
         for k in 0..3 {
             lo[k] = lo[k].min(l[k]);
             hi[k] = hi[k].max(h[k]);
         }
     }
-    case.symmetry
+    symmetry
         .iter()
         .map(|s| {
             let centre = 0.5 * (lo[s.axis] + hi[s.axis]);
@@ -170,7 +177,7 @@ pub fn symmetry_planes(case: &Case) -> Vec<Plane> {
                 axis: s.axis,
                 position: s.position,
                 side,
-                wall: s.wall.then_some(case.bodies.len() as u32),
+                wall: s.wall.then_some(bodies.len() as u32),
             }
         })
         .collect()
