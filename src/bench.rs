@@ -187,6 +187,7 @@ pub fn measure(
         .num_threads(threads)
         .build()
         .map_err(|e| Error::Invalid(format!("cannot start {threads} threads: {e}")))?;
+    crate::machine::release_free_memory();
     reset_peak();
     let (_, base) = rss();
     pool.install(|| match case.dimension {
