@@ -257,10 +257,12 @@ fn measure_dim<const D: usize>(
         mean_neighbors: interactions as f64 / (n as u64 * steps) as f64,
         peak_rss_bytes: peak,
         bytes_per_particle: peak.saturating_sub(base_rss) as f64 / n as f64,
-        estimated_bytes_per_particle: crate::particles::estimated_bytes_per_particle(
+        estimated_bytes_per_particle: crate::particles::estimated_bytes(
+            n as f64,
             D,
             case.simulation.formulation == crate::case::Formulation::Corrected,
-        ) as f64,
+            case.may_fail(),
+        ) / n as f64,
         halos,
     })
 }
@@ -360,7 +362,7 @@ pub fn run_all(
     if wanted("large") && !quick && ranks.size() == 1 {
         let deck = cube_deck(LARGE_CUBE);
         let n = LARGE_CUBE.pow(3) as f64;
-        let need = n * crate::particles::estimated_bytes_per_particle(3, false) as f64;
+        let need = crate::particles::estimated_bytes(n, 3, false, false);
         match crate::machine::available_memory() {
             Some(have) if have < 1.1 * need => {
                 let why = format!(

@@ -289,6 +289,13 @@ pub struct PictureSpec {
 }
 
 impl Case {
+    /// Whether a body's material has a damage model, so that particles may fail.
+    pub fn may_fail(&self) -> bool {
+        self.bodies
+            .iter()
+            .any(|b| !self.materials[b.material].damage.is_none())
+    }
+
     /// The physical set-up as (key, value) lines: everything that shapes the particles and the
     /// equations — dimension, kernel, numerics, materials, bodies, interactions, symmetry — and
     /// nothing a run may change on resuming (end time, step cap, outputs). A checkpoint keeps

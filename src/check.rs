@@ -12,7 +12,7 @@ use crate::deck::estimate_particles;
 use crate::error::{Error, Result};
 use crate::material::Material;
 use crate::output::summary::Summary;
-use crate::particles::estimated_bytes_per_particle;
+use crate::particles::estimated_bytes;
 use crate::physics::PairRule;
 use crate::simulation::Simulation;
 use std::fmt::Write;
@@ -120,7 +120,7 @@ pub fn check(case: &Case) -> Result<String> {
 fn plan_lines(case: &Case, n: f64, dt: f64, w: &mut String, warnings: &mut Vec<String>) {
     let steps = (case.simulation.end_time / dt).ceil();
     let corrected = case.simulation.formulation == crate::case::Formulation::Corrected;
-    let bytes = n * estimated_bytes_per_particle(case.dimension, corrected) as f64;
+    let bytes = estimated_bytes(n, case.dimension, corrected, case.may_fail());
     let cores = crate::machine::cores() as f64;
     let per_core = match case.simulation.formulation {
         crate::case::Formulation::Conventional => PLANNING_PARTICLE_STEPS_PER_CORE,

@@ -341,23 +341,32 @@ pub fn from3<const D: usize>(a: [f64; 3]) -> Vector<D> {
     Vector::<D>::from_fn(|k, _| a[k])
 }
 
-/// Estimated memory per particle in bytes, used by `strike check` and the deck's memory check:
-/// what `strike bench` measures (peak resident memory over the steps, set-up included, per
-/// particle) plus about 5 % for ghosts and the allocator. In 3D (2026-11-30, a cube of 10⁶
-/// particles): 773 B, of which the state is about 360 B, the packed neighbour lists with their
-/// skin about 165 (`neighbors`), the rate pass's results 152 and its window of neighbour
-/// records about 25 (`physics`), and the search's buffers about 60; the peak of 3 steps of
-/// `strike run` is 783 MB. Contact adds the colour states' slots (4 B; the states themselves
-/// only for the particles near another body) and the search radii max(h, h0) (8 B): two cubes
-/// in contact, 1.02·10⁶ particles, 790 B. CN-SPH adds B, (σ/ρ²)B and the correction pass's records:
-/// 1110 B. In 2D at 5·10⁵ particles: 537 B, and 744 B in CN-SPH (3 steps of `strike run`).
-pub fn estimated_bytes_per_particle(dimension: usize, corrected: bool) -> usize {
-    match (dimension, corrected) {
-        (2, false) => 565,
-        (2, true) => 775,
-        (_, false) => 810,
-        (_, true) => 1160,
-    }
+/// Estimated memory of a run of `n` particles in bytes, used by `strike check`, the deck's
+/// memory check and `strike bench`: what `strike bench` measures (peak resident memory over
+/// the steps, set-up included) plus about 5 % for ghosts and the allocator. A figure a
+/// particle for what grows with the particles, and the rate pass's neighbour records apart
+/// ([`crate::physics::record_bytes`]), which do not: a ring of a window's records (26 bytes
+/// a particle at a million in 3D, a floor of a few MB for small cases) or, once a particle of
+/// a material with a damage model (`fails`) has failed, every particle's record (200 bytes a
+/// particle in 3D). In 3D (2026-11-30, a cube of 10⁶ particles): 773 B a particle, of which
+/// the state is about 360 B, the packed neighbour lists with their skin about 165
+/// (`neighbors`), the rate pass's results 152 and its window of records about 25, and the
+/// search's buffers about 60; the peak of 3 steps of `strike run` is 783 MB. Contact adds the
+/// colour states' slots (4 B; the states themselves only for the particles near another body)
+/// and the search radii max(h, h0) (8 B): two cubes in contact, 1.02·10⁶ particles, 790 B.
+/// CN-SPH adds B, (σ/ρ²)B and the correction pass's records: 1110 B. In 2D at 5·10⁵
+/// particles: 537 B, and 744 B in CN-SPH (3 steps of `strike run`).
+pub fn estimated_bytes(n: f64, dimension: usize, corrected: bool, fails: bool) -> f64 {
+    // The figures of 2026-11-30 (with 5 %) less the records at those sizes: 26 B a particle
+    // at 10⁶ in 3D, 23 at 5·10⁵ in 2D.
+    let per = match (dimension, corrected) {
+        (2, false) => 542.0,
+        (2, true) => 752.0,
+        (_, false) => 784.0,
+        (_, true) => 1134.0,
+    };
+    let records = crate::physics::record_bytes(n.min(u32::MAX as f64) as usize, dimension, fails);
+    n * per + records
 }
 
 /// `v[first + k] = v[sources[k]]` for every k, in parallel (every source below `first`).

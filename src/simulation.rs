@@ -1324,6 +1324,35 @@ mod tests {
     /// A step too small to advance the time (here: one particle's sound speed made absurd)
     /// stops the run with the particle that sets it, instead of stepping forever.
     #[test]
+    fn the_records_held_are_those_check_estimates() {
+        // A cube of 25³ particles (one window: its ring holds every record, rounded up to a
+        // power of two) and of 50³ (a window and the slabs beside it).
+        for edge in [25, 50] {
+            let n = edge * edge * edge;
+            let case = crate::deck::parse(&crate::bench::cube_deck(edge), "cube.toml").unwrap();
+            let mut sim = Simulation::<3>::new(&case).unwrap();
+            sim.step(f64::INFINITY).unwrap();
+            let held = sim.rates.record_bytes_held() as f64;
+            let estimate = crate::physics::record_bytes(n, 3, false);
+            // The padding record beside the ring.
+            assert!(
+                (held / estimate - 1.0).abs() < 1e-3,
+                "{edge}³: {held} for {estimate}"
+            );
+            // Once a particle has failed, every particle's record (and the padding's).
+            sim.particles.damage[0] = 1.0;
+            sim.step(f64::INFINITY).unwrap();
+            let held = sim.rates.record_bytes_held() as f64;
+            let estimate = crate::physics::record_bytes(n, 3, true);
+            assert!(
+                held <= estimate * (1.0 + 1e-3),
+                "{edge}³: {held} for {estimate}"
+            );
+            assert!(held >= (n * 200) as f64, "{edge}³: {held}");
+        }
+    }
+
+    #[test]
     fn a_step_that_does_not_advance_time_stops_the_run() {
         let deck = r#"
 [simulation]

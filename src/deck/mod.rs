@@ -721,7 +721,11 @@ impl Ctx<'_> {
             self.symmetry((deck.symmetry.as_deref(), deck.wall.as_deref()), dimension)?;
         let corrected = simulation.formulation == Formulation::Corrected;
         let planes = crate::setup::planes_of(&bodies, &symmetry);
-        self.check_memory(raw_bodies, &bodies, &planes, (dimension, corrected), memory)?;
+        let fails = bodies
+            .iter()
+            .any(|b| !materials[b.material].damage.is_none());
+        let kind = (dimension, corrected, fails);
+        self.check_memory(raw_bodies, &bodies, &planes, kind, memory)?;
 
         let interactions = self.interactions(deck.interaction.as_deref(), &bodies)?;
         let output = self.output(deck.output.as_ref(), simulation.end_time)?;
@@ -1221,7 +1225,7 @@ impl Ctx<'_> {
         raw_bodies: &[raw::Located<raw::Body>],
         bodies: &[BodySpec],
         planes: &[crate::boundary::Plane],
-        (dim, corrected): (usize, bool),
+        (dim, corrected, fails): (usize, bool, bool),
         memory: Option<f64>,
     ) -> Result<()> {
         let counts: Vec<f64> = bodies
@@ -1229,7 +1233,8 @@ impl Ctx<'_> {
             .map(|b| estimate_particles(&b.shape, b.spacing, dim, planes))
             .collect();
         let total: f64 = counts.iter().sum();
-        let per = crate::particles::estimated_bytes_per_particle(dim, corrected) as f64;
+        // Bytes a particle at this size (the records' share is not quite proportional).
+        let per = crate::particles::estimated_bytes(total, dim, corrected, fails) / total.max(1.0);
         // The particle store numbers particles with u32.
         let limit_count = u32::MAX as f64;
         let limit_memory = memory.map_or(f64::INFINITY, |m| m / per);

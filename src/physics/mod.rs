@@ -364,6 +364,14 @@ pub struct Rates<const D: usize> {
     cracks: CrackLists<D>,
 }
 
+impl<const D: usize> Rates<D> {
+    /// Bytes of neighbour records the last pass held (the window's ring and the records by
+    /// index), what [`record_bytes`] estimates.
+    pub fn record_bytes_held(&self) -> usize {
+        (self.gather.capacity() + self.tail.capacity()) * std::mem::size_of::<Gather<D>>()
+    }
+}
+
 /// A D × D matrix in plain arrays (row-major), as the pass reads it.
 type Matrix<const D: usize> = [[f64; D]; D];
 
@@ -537,6 +545,30 @@ const LANES: usize = 4;
 /// meeting head-on then part within 0.6 % (±1 km/s) and 0.8 % (±3.5 km/s) of their speed. With
 /// the contact springs' factor 2 they lost 4 %, without the look-ahead 8 %.
 const BACKSTOP_STEP: f64 = 1.0;
+/// The bytes of neighbour records the rate pass holds for a store of `n` real particles in
+/// cell order, each slab of cells holding n^((D−1)/D) of them (a cube's): while no particle has
+/// failed, the ring of one window and the two slabs either side of it, its length a power of
+/// two (see [`WINDOW_PAGES`]); once one has (`failed`), every particle's record. For a few
+/// tens of thousands of particles the ring holds them all, rounded up: 210–290 bytes a
+/// particle, against 26 at a million in 3D, which is why `check` read the small cases of
+/// `strike bench` 6–35 % short with one figure a particle (2026-12-02).
+pub fn record_bytes(n: usize, dimension: usize, failed: bool) -> f64 {
+    let (size, d) = match dimension {
+        2 => (std::mem::size_of::<Gather<2>>(), 2.0),
+        _ => (std::mem::size_of::<Gather<3>>(), 3.0),
+    };
+    let window = WINDOW_PAGES.max(n.div_ceil(PAGE).div_ceil(WINDOWS)) * PAGE;
+    let slab = (n as f64).powf((d - 1.0) / d) as usize;
+    let span = if n <= window {
+        n
+    } else {
+        n.min(window + 4 * slab)
+    };
+    let ring = span.max(1).next_power_of_two();
+    let held = if failed { ring.max(n + 1) } else { ring };
+    (held * size) as f64
+}
+
 /// In-support neighbours are collected in batches of this many (a multiple of `LANES`) before
 /// their sums, on the stack.
 const BATCH: usize = 64;
