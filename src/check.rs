@@ -132,7 +132,18 @@ fn plan_lines(case: &Case, n: f64, dt: f64, w: &mut String, warnings: &mut Vec<S
         "first time step: {dt:.4e} s  → about {steps:.0} steps to {:.4e} s (contact may shorten it)",
         case.simulation.end_time
     );
-    let _ = writeln!(w, "estimated memory: {}", human_bytes(bytes));
+    let _ = write!(w, "estimated memory: {}", human_bytes(bytes));
+    if case.may_fail() {
+        // The crack lists (`physics::CrackLists`: an index, the position, h, reach² and
+        // pressure of each failed neighbour) grow with the share that fails, which the deck
+        // does not tell.
+        let per = 4 + 8 * (case.dimension + 3);
+        let _ = write!(
+            w,
+            " (materials that fail: the failed particles' crack lists add {per} bytes for each failed neighbour in a particle's support, about 360 bytes a particle where an eighth of the particles has failed in 3D)"
+        );
+    }
+    let _ = writeln!(w);
     let _ = writeln!(
         w,
         "estimated run time: {} on {} cores (planning figure {:.0e} particle-steps/s per core)",
