@@ -259,6 +259,12 @@ fn measure_dim<const D: usize>(
         bytes_per_particle: peak.saturating_sub(base_rss) as f64 / n as f64,
         estimated_bytes_per_particle: crate::particles::estimated_bytes(
             n as f64,
+            crate::deck::estimate_ghosts(
+                &case.bodies,
+                D,
+                &crate::setup::symmetry_planes(case),
+                case.simulation.smoothing_ratio,
+            ),
             D,
             case.simulation.formulation == crate::case::Formulation::Corrected,
             case.may_fail(),
@@ -362,7 +368,7 @@ pub fn run_all(
     if wanted("large") && !quick && ranks.size() == 1 {
         let deck = cube_deck(LARGE_CUBE);
         let n = LARGE_CUBE.pow(3) as f64;
-        let need = crate::particles::estimated_bytes(n, 3, false, false);
+        let need = crate::particles::estimated_bytes(n, 0.0, 3, false, false);
         match crate::machine::available_memory() {
             Some(have) if have < 1.1 * need => {
                 let why = format!(

@@ -120,7 +120,10 @@ pub fn check(case: &Case) -> Result<String> {
 fn plan_lines(case: &Case, n: f64, dt: f64, w: &mut String, warnings: &mut Vec<String>) {
     let steps = (case.simulation.end_time / dt).ceil();
     let corrected = case.simulation.formulation == crate::case::Formulation::Corrected;
-    let bytes = estimated_bytes(n, case.dimension, corrected, case.may_fail());
+    let planes = crate::setup::symmetry_planes(case);
+    let ratio = case.simulation.smoothing_ratio;
+    let ghosts = crate::deck::estimate_ghosts(&case.bodies, case.dimension, &planes, ratio);
+    let bytes = estimated_bytes(n, ghosts, case.dimension, corrected, case.may_fail());
     let cores = crate::machine::cores() as f64;
     let per_core = match case.simulation.formulation {
         crate::case::Formulation::Conventional => PLANNING_PARTICLE_STEPS_PER_CORE,

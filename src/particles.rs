@@ -356,7 +356,11 @@ pub fn from3<const D: usize>(a: [f64; 3]) -> Vector<D> {
 /// and the search radii max(h, h0) (8 B): two cubes in contact, 1.02·10⁶ particles, 790 B.
 /// CN-SPH adds B, (σ/ρ²)B and the correction pass's records: 1110 B. In 2D at 5·10⁵
 /// particles: 537 B, and 744 B in CN-SPH (3 steps of `strike run`).
-pub fn estimated_bytes(n: f64, dimension: usize, corrected: bool, fails: bool) -> f64 {
+///
+/// `ghosts`: the symmetry planes' ghosts (`deck::estimate_ghosts`), each a particle's state,
+/// its neighbour record and, in CN-SPH, B and (σ/ρ²)B (the sphere–plate demo has 6 948 for its
+/// 47 812 particles, about 80 bytes a particle).
+pub fn estimated_bytes(n: f64, ghosts: f64, dimension: usize, corrected: bool, fails: bool) -> f64 {
     // The figures of 2026-11-30 (with 5 %) less the records at those sizes: 26 B a particle
     // at 10⁶ in 3D, 23 at 5·10⁵ in 2D.
     let per = match (dimension, corrected) {
@@ -366,7 +370,37 @@ pub fn estimated_bytes(n: f64, dimension: usize, corrected: bool, fails: bool) -
         (_, true) => 1134.0,
     };
     let records = crate::physics::record_bytes(n.min(u32::MAX as f64) as usize, dimension, fails);
-    n * per + records
+    let state = match dimension {
+        2 => state_bytes::<2>(),
+        _ => state_bytes::<3>(),
+    };
+    let tensors = if corrected {
+        2 * dimension * dimension * 8
+    } else {
+        0
+    };
+    let ghost = state + crate::physics::record_size(dimension) + tensors;
+    n * per + records + ghosts * ghost as f64 + FIXED_BYTES
+}
+
+/// What a run holds whatever its size, beyond the per-particle figures and the records: the
+/// allocator's arenas and the thread pool's first allocations. `strike bench`'s cases of
+/// 16 000–20 000 particles, each first in a fresh process, grew 1.1–1.8 MB more than the
+/// rest of the model (2026-12-02).
+const FIXED_BYTES: f64 = 1.5e6;
+
+/// Bytes of one particle's state: every field of [`Particles`].
+pub fn state_bytes<const D: usize>() -> usize {
+    fn element<T>(_: &[T]) -> usize {
+        std::mem::size_of::<T>()
+    }
+    let p = Particles::<D>::default();
+    let mut total = 0;
+    macro_rules! add {
+        ($($f:ident),*) => { $(total += element(&p.$f);)* };
+    }
+    for_each_field!(add);
+    total
 }
 
 /// `v[first + k] = v[sources[k]]` for every k, in parallel (every source below `first`).

@@ -57,6 +57,24 @@ pub fn estimate_particles(
     share * whole_shape_particles(shape, spacing, dimension)
 }
 
+/// Expected ghosts of the bodies: their particles that the symmetry planes `planes` mirror
+/// ([`crate::setup::shapes::ghost_estimate`]), those within the ghost layers' reach at the
+/// start, (2 + skin) h of the largest spacing's h = `ratio` × spacing.
+pub fn estimate_ghosts(
+    bodies: &[BodySpec],
+    dimension: usize,
+    planes: &[crate::boundary::Plane],
+    ratio: f64,
+) -> f64 {
+    let spacing = bodies.iter().map(|b| b.spacing).fold(0.0, f64::max);
+    let reach = (2.0 + crate::simulation::SKIN) * ratio * spacing;
+    let ghosts = |b: &BodySpec| match dimension {
+        2 => crate::setup::shapes::ghost_estimate::<2>(&b.shape, b.spacing, planes, reach),
+        _ => crate::setup::shapes::ghost_estimate::<3>(&b.shape, b.spacing, planes, reach),
+    };
+    bodies.iter().map(ghosts).sum()
+}
+
 /// The whole shape's volume (area in 2D) over spacing^D.
 fn whole_shape_particles(shape: &Shape, spacing: f64, dimension: usize) -> f64 {
     use std::f64::consts::PI;
@@ -724,8 +742,9 @@ impl Ctx<'_> {
         let fails = bodies
             .iter()
             .any(|b| !materials[b.material].damage.is_none());
+        let ghosts = estimate_ghosts(&bodies, dimension, &planes, simulation.smoothing_ratio);
         let kind = (dimension, corrected, fails);
-        self.check_memory(raw_bodies, &bodies, &planes, kind, memory)?;
+        self.check_memory(raw_bodies, &bodies, (&planes, ghosts), kind, memory)?;
 
         let interactions = self.interactions(deck.interaction.as_deref(), &bodies)?;
         let output = self.output(deck.output.as_ref(), simulation.end_time)?;
@@ -1224,7 +1243,7 @@ impl Ctx<'_> {
         &self,
         raw_bodies: &[raw::Located<raw::Body>],
         bodies: &[BodySpec],
-        planes: &[crate::boundary::Plane],
+        (planes, ghosts): (&[crate::boundary::Plane], f64),
         (dim, corrected, fails): (usize, bool, bool),
         memory: Option<f64>,
     ) -> Result<()> {
@@ -1234,7 +1253,8 @@ impl Ctx<'_> {
             .collect();
         let total: f64 = counts.iter().sum();
         // Bytes a particle at this size (the records' share is not quite proportional).
-        let per = crate::particles::estimated_bytes(total, dim, corrected, fails) / total.max(1.0);
+        let per = crate::particles::estimated_bytes(total, ghosts, dim, corrected, fails)
+            / total.max(1.0);
         // The particle store numbers particles with u32.
         let limit_count = u32::MAX as f64;
         let limit_memory = memory.map_or(f64::INFINITY, |m| m / per);

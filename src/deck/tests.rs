@@ -548,7 +548,11 @@ fn memory_check_names_the_largest_body_and_a_spacing_that_fits() {
         .sum();
     let rod = estimate_particles(&case.bodies[2].shape, s, 3, &planes);
     let fails = case.may_fail();
-    let need = crate::particles::estimated_bytes(others + rod, 3, false, fails);
+    let ratio = case.simulation.smoothing_ratio;
+    let mut bodies = case.bodies.clone();
+    bodies[2].spacing = s;
+    let ghosts = estimate_ghosts(&bodies, 3, &planes, ratio);
+    let need = crate::particles::estimated_bytes(others + rod, ghosts, 3, false, fails);
     assert!(need <= 1024.0f64.powi(3), "{s}");
     // Unknown memory: no memory check, but the u32 particle numbering still applies.
     assert!(ctx.build(&raw, None).is_ok());
@@ -689,6 +693,17 @@ fn estimated_particles_are_the_model_side_of_the_symmetry_planes() {
         (estimated / made - 1.0).abs() < 0.02,
         "{estimated} for {made}"
     );
+    // Its ghosts (the two planes' layers within reach, and the few ghosts of ghosts where the
+    // planes meet, which the estimate leaves out).
+    let case = parse(include_str!("../../examples/sphere_plate.toml"), "x.toml").unwrap();
+    let planes = crate::setup::symmetry_planes(&case);
+    let ratio = case.simulation.smoothing_ratio;
+    let ghosts = estimate_ghosts(&case.bodies, 3, &planes, ratio);
+    let mut sim = crate::simulation::Simulation::<3>::new(&case).unwrap();
+    sim.step(f64::INFINITY).unwrap();
+    let made = (sim.particles.len() - sim.particles.n_real) as f64;
+    assert_eq!(made, 6948.0);
+    assert!(ghosts < made && ghosts > 0.9 * made, "{ghosts} for {made}");
     let cut = "[simulation]\ndimension = 3\nend_time = 1e-6\n[materials.al]\nlibrary = \"al_6061_t6\"\n[[body]]\nname = \"b\"\nmaterial = \"al\"\nspacing = 1e-4\nshape = { type = \"box\", min = [-1e-3, 0.0, 0.0], max = [3e-3, 1e-3, 1e-3] }\n[[symmetry]]\naxis = \"x\"\n";
     let (estimated, made) = count(cut);
     assert_eq!(made, 3000.0);

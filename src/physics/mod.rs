@@ -553,10 +553,7 @@ const BACKSTOP_STEP: f64 = 1.0;
 /// particle, against 26 at a million in 3D, which is why `check` read the small cases of
 /// `strike bench` 6–35 % short with one figure a particle (2026-12-02).
 pub fn record_bytes(n: usize, dimension: usize, failed: bool) -> f64 {
-    let (size, d) = match dimension {
-        2 => (std::mem::size_of::<Gather<2>>(), 2.0),
-        _ => (std::mem::size_of::<Gather<3>>(), 3.0),
-    };
+    let (size, d) = (record_size(dimension), dimension.clamp(2, 3) as f64);
     let window = WINDOW_PAGES.max(n.div_ceil(PAGE).div_ceil(WINDOWS)) * PAGE;
     let slab = (n as f64).powf((d - 1.0) / d) as usize;
     let span = if n <= window {
@@ -567,6 +564,14 @@ pub fn record_bytes(n: usize, dimension: usize, failed: bool) -> f64 {
     let ring = span.max(1).next_power_of_two();
     let held = if failed { ring.max(n + 1) } else { ring };
     (held * size) as f64
+}
+
+/// Bytes of one particle's neighbour record in the rate pass (200 in 3D, 176 in 2D).
+pub fn record_size(dimension: usize) -> usize {
+    match dimension {
+        2 => std::mem::size_of::<Gather<2>>(),
+        _ => std::mem::size_of::<Gather<3>>(),
+    }
 }
 
 /// In-support neighbours are collected in batches of this many (a multiple of `LANES`) before
