@@ -550,8 +550,8 @@ const BACKSTOP_STEP: f64 = 1.0;
 /// failed, the ring of one window and the two slabs either side of it, its length a power of
 /// two (see [`WINDOW_PAGES`]); once one has (`failed`), every particle's record. For a few
 /// tens of thousands of particles the ring holds them all, rounded up: 210–290 bytes a
-/// particle, against 26 at a million in 3D, which is why `check` read the small cases of
-/// `strike bench` 6–35 % short with one figure a particle (2026-12-02).
+/// particle, against 26 at a million in 3D, most of why `check`, with one figure a particle,
+/// read the small cases of `strike bench` 17–44 % short (2026-12-02).
 pub fn record_bytes(n: usize, dimension: usize, failed: bool) -> f64 {
     let (size, d) = (record_size(dimension), dimension.clamp(2, 3) as f64);
     let window = WINDOW_PAGES.max(n.div_ceil(PAGE).div_ceil(WINDOWS)) * PAGE;
