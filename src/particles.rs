@@ -343,7 +343,7 @@ pub fn from3<const D: usize>(a: [f64; 3]) -> Vector<D> {
 
 /// Estimated memory of a run of `n` particles in bytes, used by `strike check`, the deck's
 /// memory check and `strike bench`: what `strike bench` measures (peak resident memory over
-/// the steps, set-up included) plus about 5 %, and [`FIXED_BYTES`]. A figure a particle for
+/// the steps, set-up included) plus about 5 %, and `FIXED_BYTES`. A figure a particle for
 /// what grows with the particles, and the rate pass's neighbour records apart
 /// ([`crate::physics::record_bytes`]), which do not: a ring of a window's records (26 bytes
 /// a particle at a million in 3D, a floor of a few MB for small cases) or, once a particle of

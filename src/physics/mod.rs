@@ -548,7 +548,7 @@ const BACKSTOP_STEP: f64 = 1.0;
 /// The bytes of neighbour records the rate pass holds for a store of `n` real particles in
 /// cell order, each slab of cells holding n^((D−1)/D) of them (a cube's): while no particle has
 /// failed, the ring of one window and the two slabs either side of it, its length a power of
-/// two (see [`WINDOW_PAGES`]); once one has (`failed`), every particle's record. For a few
+/// two (see `WINDOW_PAGES`); once one has (`failed`), every particle's record. For a few
 /// tens of thousands of particles the ring holds them all, rounded up: 210–290 bytes a
 /// particle, against 26 at a million in 3D, most of why `check`, with one figure a particle,
 /// read the small cases of `strike bench` 17–44 % short (2026-12-02).
