@@ -1321,8 +1321,8 @@ mod tests {
         assert_eq!(sim.own_halo(), halo(8000, 0, 0));
     }
 
-    /// A step too small to advance the time (here: one particle's sound speed made absurd)
-    /// stops the run with the particle that sets it, instead of stepping forever.
+    /// The rate pass holds the neighbour records that `check`'s memory estimate counts
+    /// (`physics::record_bytes`): a ring of a window's, and every particle's once one failed.
     #[test]
     fn the_records_held_are_those_check_estimates() {
         // A cube of 25³ particles (one window: its ring holds every record, rounded up to a
@@ -1352,6 +1352,8 @@ mod tests {
         }
     }
 
+    /// A step too small to advance the time (here: one particle's sound speed made absurd)
+    /// stops the run with the particle that sets it, instead of stepping forever.
     #[test]
     fn a_step_that_does_not_advance_time_stops_the_run() {
         let deck = r#"
