@@ -42,6 +42,8 @@ pub struct BenchCase {
     /// The halos a domain decomposition would exchange at the end of the timed steps: under
     /// MPI the run's own ranks', on one process splits of its lists into several ranks.
     pub halos: Vec<HaloFigure>,
+    /// Where each rank's time went over the timed steps (one entry on one process).
+    pub phases: Vec<crate::simulation::PhaseSeconds>,
 }
 
 /// The halos of one split into ranks (see [`crate::ranks::Halo`]).
@@ -209,12 +211,28 @@ fn measure_dim<const D: usize>(
         sim.step(f64::INFINITY)?;
     }
     let exchanged = sim.exchange_seconds();
+    let before = sim.phase_seconds();
     let start = Instant::now();
     let mut interactions = 0u64;
     for _ in 0..steps {
         interactions += sim.step(f64::INFINITY)?.interactions as u64;
     }
     let wall = start.elapsed().as_secs_f64();
+    let after = sim.phase_seconds();
+    let each =
+        |f: fn(&crate::simulation::PhaseSeconds) -> f64| ranks.gather_each(f(&after) - f(&before));
+    let (search, passes, exchanges) = (
+        each(|s| s.search),
+        each(|s| s.passes),
+        each(|s| s.exchanges),
+    );
+    let phases = (0..ranks.size())
+        .map(|r| crate::simulation::PhaseSeconds {
+            search: search[r],
+            passes: passes[r],
+            exchanges: exchanges[r],
+        })
+        .collect();
     let n = sim.particles.n_real;
     let (peak, _) = rss();
     let halos = if census.is_empty() {
@@ -270,6 +288,7 @@ fn measure_dim<const D: usize>(
             case.may_fail(),
         ) / n as f64,
         halos,
+        phases,
     })
 }
 
@@ -447,6 +466,33 @@ pub fn run_all(
     Ok(BenchReport { cases })
 }
 
+/// Where the time of each rank went (see [`crate::simulation::PhaseSeconds`]), a line after a
+/// case's own: what an MPI run's speed-up is bound by (a rank that searches longer than the
+/// others keeps them waiting at the halo).
+fn phases_line(c: &BenchCase) -> String {
+    let rank = |(r, s): (usize, &crate::simulation::PhaseSeconds)| {
+        let exchanges = if c.ranks > 1 {
+            format!(", exchanges {:.2}", s.exchanges)
+        } else {
+            String::new()
+        };
+        let who = if c.ranks > 1 {
+            format!("rank {r}: ")
+        } else {
+            String::new()
+        };
+        format!(
+            "{who}search {:.2}, passes {:.2}{exchanges}",
+            s.search, s.passes
+        )
+    };
+    let ranks: Vec<String> = c.phases.iter().enumerate().map(rank).collect();
+    if ranks.is_empty() {
+        return String::new();
+    }
+    format!("\n  seconds in the timed steps: {}", ranks.join("; "))
+}
+
 /// One human-readable line.
 pub fn line(c: &BenchCase) -> String {
     format!(
@@ -468,7 +514,8 @@ pub fn line(c: &BenchCase) -> String {
         c.peak_rss_bytes as f64 / 1e6,
         c.bytes_per_particle,
         c.estimated_bytes_per_particle
-    ) + &c
+    ) + &phases_line(c)
+        + &c
         .halos
         .iter()
         .map(|h| {

@@ -104,6 +104,11 @@ pub struct Simulation<const D: usize> {
     /// in all.
     busy: f64,
     exchanging: f64,
+    /// Seconds in all in the neighbour search (refreshes, partial rebuilds and full builds,
+    /// their exchanges left out) and in the passes (`busy`'s share, summed over the whole run):
+    /// with `exchanging`, where a rank's time goes ([`Simulation::phase_seconds`]).
+    searching: f64,
+    passing: f64,
     /// Seconds this rank's last full search took, its exchanges included: what new ranges
     /// cost (see `lagging_rank`).
     rebuild: f64,
@@ -250,6 +255,22 @@ fn blocks_of(parts: &[Range<usize>], per: usize) -> Vec<Range<usize>> {
         .collect()
 }
 
+/// Where a rank's time goes, in seconds since the run started. Under MPI the ranks meet at the
+/// halo (after the search) and at the step's reductions (after the passes), so a step lasts
+/// about the slowest rank's search plus the slowest rank's passes: a rank's wait for the others
+/// shows in its `exchanges`.
+#[derive(Debug, Clone, Copy, Default, PartialEq, serde::Serialize)]
+pub struct PhaseSeconds {
+    /// The neighbour search: refreshes, partial rebuilds, full builds (their exchanges aside).
+    pub search: f64,
+    /// The passes over this rank's own particles: CN-SPH's corrections, the colour states and
+    /// the rates.
+    pub passes: f64,
+    /// The exchanges between ranks, the waits for slower ranks included (next to nothing on
+    /// one rank, whose exchange calls return at once).
+    pub exchanges: f64,
+}
+
 /// Real particles are put back in cell order at least this often (steps), for memory locality.
 pub const REORDER_EVERY: u64 = 50;
 /// Under MPI, the ranks compare their loads this often (steps), and take new ranges early only
@@ -348,6 +369,8 @@ impl<const D: usize> Simulation<D> {
             positions: Default::default(),
             moved: None,
             busy: 0.0,
+            searching: 0.0,
+            passing: 0.0,
             exchanging: 0.0,
             rebuild: 0.0,
             balanced: 0,
@@ -427,6 +450,15 @@ impl<const D: usize> Simulation<D> {
     /// Seconds spent in the exchanges between ranks so far (0 on one rank).
     pub fn exchange_seconds(&self) -> f64 {
         self.exchanging
+    }
+
+    /// Where this rank's time has gone so far: see [`PhaseSeconds`].
+    pub fn phase_seconds(&self) -> PhaseSeconds {
+        PhaseSeconds {
+            search: self.searching,
+            passes: self.passing,
+            exchanges: self.exchanging,
+        }
     }
 
     /// The halos `count` ranks would exchange at the current state (see [`crate::ranks::Halo`]):
@@ -641,6 +673,7 @@ impl<const D: usize> Simulation<D> {
         } else {
             self.ghosts.update(p, &self.symmetry);
         }
+        let (search, exchanged) = (Instant::now(), self.exchanging);
         let wide = self.model.colour.is_some();
         let reorder = self.state.step >= self.state.last_reorder + REORDER_EVERY;
         let mut need = Refresh::Full;
@@ -730,6 +763,7 @@ impl<const D: usize> Simulation<D> {
             self.ranged = self.state.step;
             self.lagging = None;
         }
+        self.searching += search.elapsed().as_secs_f64() - (self.exchanging - exchanged);
         if self.ranks.size() > 1 {
             let lap = Instant::now();
             self.receive_halo(need);
@@ -761,7 +795,8 @@ impl<const D: usize> Simulation<D> {
                     physics::corrections(WendlandC2, p, nl, model, owned, out)
                 }
             };
-            self.busy += lap.elapsed().as_secs_f64();
+            let t = lap.elapsed().as_secs_f64();
+            (self.busy, self.passing) = (self.busy + t, self.passing + t);
             lap = Instant::now();
             // The halo's corrections from their ranks (what the rate pass reads of them: B,
             // and the surface indicator), and every rank's count of fallbacks.
@@ -815,7 +850,8 @@ impl<const D: usize> Simulation<D> {
                     &mut self.colour,
                 ),
             }
-            self.busy += lap.elapsed().as_secs_f64();
+            let t = lap.elapsed().as_secs_f64();
+            (self.busy, self.passing) = (self.busy + t, self.passing + t);
             lap = Instant::now();
             self.colour.swap(ranks, &self.plan);
             self.exchanging += lap.elapsed().as_secs_f64();
@@ -838,7 +874,8 @@ impl<const D: usize> Simulation<D> {
             }
         }
         std::mem::swap(&mut self.rates.contact_force, &mut p.contact_force);
-        self.busy += lap.elapsed().as_secs_f64();
+        let t = lap.elapsed().as_secs_f64();
+        (self.busy, self.passing) = (self.busy + t, self.passing + t);
         // Each rank's rates stay its own: it advances only its own particles.
         let rates = &self.rates.particles;
         let near = |i: usize| rates[i].min_interbody_gap.is_finite();

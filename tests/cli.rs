@@ -312,6 +312,16 @@ fn bench_writes_its_report() {
             12.0..22.0
         };
         assert!(range.contains(&nb), "{}: {nb} neighbours", c["name"]);
+        // Where the time went: one entry a rank, the search and the passes parts of the
+        // timed steps (disjoint spans of them, so together within the wall time), and on one
+        // process next to nothing in the exchanges (calls that return at once).
+        let phases = c["phases"].as_array().unwrap();
+        assert_eq!(phases.len(), 1, "{c}");
+        let part = |k: &str| phases[0][k].as_f64().unwrap();
+        let wall = c["wall_seconds"].as_f64().unwrap();
+        assert!(part("search") > 0.0 && part("passes") > 0.0, "{c}");
+        assert!(part("search") + part("passes") <= wall, "{c}");
+        assert!(part("exchanges") < 0.01 * wall, "{c}");
     }
     // Every case on 1 thread and on all cores (the large case and the scaling runs have their
     // own thread counts).

@@ -320,3 +320,39 @@ fn other_commands_refuse_several_ranks() {
         "{text}"
     );
 }
+
+/// `mpirun -n 2 strike bench` reports where each rank's time went over the timed steps: the
+/// search, the passes and the exchanges (waits included), disjoint spans of those steps, so
+/// that they add up to no more than the wall time, and both ranks exchange.
+#[test]
+fn bench_on_2_ranks_reports_each_ranks_phases() {
+    let d = dir("bench_phases");
+    let json = d.join("bench.json");
+    let o = Command::new("mpirun")
+        .args(["--oversubscribe", "-n", "2"])
+        .arg(mpi_strike())
+        .args(["bench", "--quick", "--case", "cubes_3d", "--json"])
+        .arg(&json)
+        .env("OMPI_ALLOW_RUN_AS_ROOT", "1")
+        .env("OMPI_ALLOW_RUN_AS_ROOT_CONFIRM", "1")
+        .env("RAYON_NUM_THREADS", "1")
+        .output()
+        .unwrap();
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let v: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(&json).unwrap()).unwrap();
+    for c in v["cases"].as_array().unwrap() {
+        assert_eq!(c["ranks"], 2, "{c}");
+        let wall = c["wall_seconds"].as_f64().unwrap();
+        let phases = c["phases"].as_array().unwrap();
+        assert_eq!(phases.len(), 2, "{c}");
+        for r in phases {
+            let part = |k: &str| r[k].as_f64().unwrap();
+            assert!(part("search") > 0.0 && part("passes") > 0.0, "{c}");
+            assert!(part("exchanges") > 0.0, "{c}");
+            // Each rank times its own loop; they end within a step's last exchange.
+            let sum = part("search") + part("passes") + part("exchanges");
+            assert!(sum <= 1.05 * wall + 0.01, "{sum} s of {wall}: {c}");
+        }
+    }
+}
