@@ -137,13 +137,12 @@ fn plan_lines(case: &Case, n: f64, dt: f64, w: &mut String, warnings: &mut Vec<S
     );
     let _ = write!(w, "estimated memory: {}", human_bytes(bytes));
     if case.may_fail() {
-        // The crack lists (`physics::CrackLists`: an index, the position, h, reach² and
-        // pressure of each failed neighbour) grow with the share that fails, which the deck
-        // does not tell.
-        let per = 4 + 8 * (case.dimension + 3);
+        // The crack lists (`physics::CrackLists`: the index of each failed neighbour, each
+        // severed pair from both sides, and 13 bytes a particle) grow with the share that
+        // fails, which the deck does not tell.
         let _ = write!(
             w,
-            " (materials that fail: the failed particles' crack lists add {per} bytes for each failed neighbour in a particle's support, about 360 bytes a particle where an eighth of the particles has failed in 3D)"
+            " (materials that fail: the crack lists add 4 bytes for each failed neighbour in a particle's support and 16 for each pair a crack severs, about 25 bytes a particle where 6 % of the particles have failed)"
         );
     }
     let _ = writeln!(w);

@@ -1561,15 +1561,42 @@ impl<const D: usize> Default for Cut<D> {
     }
 }
 
+/// What [`CrackLists::severs`] reads of one particle's candidates, one array per number: the
+/// position, the smoothing length, the reach² ((¾ Δp)², see [`CrackLists::severs`]) and the
+/// pressure ([`CrackLists::candidates`]).
+#[derive(Debug, Clone)]
+struct Candidates<const D: usize> {
+    x: [Vec<f64>; D],
+    h: Vec<f64>,
+    reach2: Vec<f64>,
+    p: Vec<f64>,
+}
+
+impl<const D: usize> Default for Candidates<D> {
+    fn default() -> Self {
+        Candidates {
+            x: std::array::from_fn(|_| Vec::new()),
+            h: Vec::new(),
+            reach2: Vec::new(),
+            p: Vec::new(),
+        }
+    }
+}
+
 /// For every real particle with a list here, the failed particles in its support of bodies
 /// that meet its own through the conservation equations, in list order: the only particles
 /// that may sever one of its pairs ([`CrackLists::severs`]). Built once a pass, where any
 /// particle has failed, so that a particle's pairs test a handful of candidates each instead
 /// of its whole list (in `strike bench`'s shocked steel cubes, 12 % of their particles failed,
 /// scanning the list for every pair made Johnson–Cook with damage cost 70 % more a step than
-/// von Mises). What the test reads of a candidate is copied beside it, one array per number,
-/// so that the test runs over the candidates in vector lanes (on AVX2 where the CPU has it)
-/// without gathering their 200-byte records: by `perf`, the test was 9 % of a step of those
+/// von Mises). What the test reads of a particle's candidates is copied into arrays beside
+/// each other, one per number ([`Candidates`]), so that the test runs over them in vector
+/// lanes (on AVX2 where the CPU has it) without gathering their 200-byte records; the copies
+/// are made a block of particles at a time as their pairs are tested, into each thread's own
+/// arrays, and only the candidates' indices are kept (4 bytes each; the copies of every
+/// candidate, kept until 2026-12-02, took 48 more in 3D: in `strike bench`'s shocked steel
+/// cubes, at 1.7 candidates a particle with 6.5 % of them failed, the peak fell by 110 bytes a
+/// particle, at the same speed and to the same bits). By `perf`, the test was 9 % of a step of those
 /// cubes, 5 % since (a pair asks it of 7 candidates on average, and 90 % of the pairs asked
 /// are not severed). Since 2026-11-28 each pair is asked once, before the pass, and the pass
 /// cuts each particle's few severed pairs in list order ([`CrackLists::find_severed`]): in a
@@ -1582,13 +1609,8 @@ impl<const D: usize> Default for Cut<D> {
 struct CrackLists<const D: usize> {
     /// ends[i]: where particle i's candidates end (they start at ends[i − 1]).
     ends: Vec<u32>,
-    /// Each candidate's index, position, smoothing length, reach² ((¾ Δp)², see
-    /// [`CrackLists::severs`]) and pressure.
+    /// Each candidate's index.
     items: Vec<u32>,
-    x: [Vec<f64>; D],
-    h: Vec<f64>,
-    reach2: Vec<f64>,
-    p: Vec<f64>,
     /// Every particle's (ghosts included): intact, with candidates, or with no list here
     /// (ghosts and another rank's particles, whose pairs then take the test in full). A pair
     /// of intact particles can be severed only where both are.
@@ -1609,10 +1631,6 @@ impl<const D: usize> Default for CrackLists<D> {
         CrackLists {
             ends: Vec::new(),
             items: Vec::new(),
-            x: std::array::from_fn(|_| Vec::new()),
-            h: Vec::new(),
-            reach2: Vec::new(),
-            p: Vec::new(),
             cracked: Vec::new(),
             failed_before: Vec::new(),
             severed_ends: Vec::new(),
@@ -1720,7 +1738,6 @@ impl<const D: usize> CrackLists<D> {
                 self.ends.push(end);
             }
         }
-        self.copy_candidates(gather, pressure);
         let mut cracked = std::mem::take(&mut self.cracked);
         cracked.clear();
         cracked.par_extend(
@@ -1729,7 +1746,7 @@ impl<const D: usize> CrackLists<D> {
                 .map(|i| !failed(i) && (i >= n || !nl.listed(i) || !self.range(i).is_empty())),
         );
         self.cracked = cracked;
-        self.find_severed(n, gather, nl, model);
+        self.find_severed(n, gather, pressure, nl, model);
     }
 
     /// Particle i's severed pairs: the neighbours (in increasing index, the list's order) that
@@ -1753,7 +1770,14 @@ impl<const D: usize> CrackLists<D> {
     /// test each pair from both sides as it met it; both answer the same
     /// ([`CrackLists::severs`]), and nine pairs in ten were not severed. The results are
     /// those of testing in the pass, to the bit: the same answers, cut in the same order.
-    fn find_severed(&mut self, n: usize, gather: Records<D>, nl: &NeighborList, model: &Model<D>) {
+    fn find_severed(
+        &mut self,
+        n: usize,
+        gather: Records<D>,
+        pressure: &[f64],
+        nl: &NeighborList,
+        model: &Model<D>,
+    ) {
         const BLOCK: usize = 4096;
         let has_list = |k: usize| k < n && nl.listed(k);
         let joined = |a: u32, b: u32| joined(model, a, b);
@@ -1761,13 +1785,20 @@ impl<const D: usize> CrackLists<D> {
         // (i, j, open), in order of i and then of j.
         let blocks: Vec<Vec<(u32, u32, bool)>> = (0..n.div_ceil(BLOCK))
             .into_par_iter()
-            .map(|b| {
+            .map_init(Candidates::default, |candidates, b| {
                 let mut hits = Vec::new();
-                for i in b * BLOCK..((b + 1) * BLOCK).min(n) {
+                let block = b * BLOCK..((b + 1) * BLOCK).min(n);
+                // The block's candidates, copied together.
+                let first = this.range(block.start).start;
+                let last = this.range(block.end - 1).end;
+                this.candidates(first..last, gather, pressure, candidates);
+                for i in block {
                     // A particle with candidates is intact and has its list here.
-                    if this.range(i).is_empty() {
+                    let range = this.range(i);
+                    if range.is_empty() {
                         continue;
                     }
+                    let mine = (&*candidates, range.start - first..range.end - first);
                     let gi = &gather[i];
                     for j in nl.list(i) {
                         let ju = j as usize;
@@ -1777,7 +1808,7 @@ impl<const D: usize> CrackLists<D> {
                         if !meets_in_pass(model, gi, &gather[ju]) {
                             continue;
                         }
-                        if let Some(open) = this.severs((i, ju), gather, joined) {
+                        if let Some(open) = this.severs((i, ju), gather, joined, mine.clone()) {
                             hits.push((i as u32, j, open));
                         }
                     }
@@ -1805,24 +1836,29 @@ impl<const D: usize> CrackLists<D> {
         }
     }
 
-    /// Beside each of `items`, what [`CrackLists::severs`] reads of it.
-    fn copy_candidates(&mut self, gather: Records<D>, pressure: &[f64]) {
-        let (g, items) = (gather, &self.items);
+    /// What [`CrackLists::severs`] reads of the candidates `span` (of [`CrackLists::items`]),
+    /// into `out`.
+    fn candidates(
+        &self,
+        span: std::ops::Range<usize>,
+        gather: Records<D>,
+        pressure: &[f64],
+        out: &mut Candidates<D>,
+    ) {
+        let items = &self.items[span];
         for a in 0..D {
-            self.x[a].clear();
-            self.x[a].par_extend(items.par_iter().map(|&k| g[k as usize].x[a]));
+            out.x[a].clear();
+            out.x[a].extend(items.iter().map(|&k| gather[k as usize].x[a]));
         }
-        self.h.clear();
-        self.h
-            .par_extend(items.par_iter().map(|&k| g[k as usize].h));
-        self.reach2.clear();
-        self.reach2.par_extend(items.par_iter().map(|&k| {
-            let reach = 0.75 * g[k as usize].dp;
+        out.h.clear();
+        out.h.extend(items.iter().map(|&k| gather[k as usize].h));
+        out.reach2.clear();
+        out.reach2.extend(items.iter().map(|&k| {
+            let reach = 0.75 * gather[k as usize].dp;
             reach * reach
         }));
-        self.p.clear();
-        self.p
-            .par_extend(items.par_iter().map(|&k| pressure[k as usize]));
+        out.p.clear();
+        out.p.extend(items.iter().map(|&k| pressure[k as usize]));
     }
 
     /// Whether the pair (i, j) of intact particles is severed: a failed particle k, in the
@@ -1843,18 +1879,22 @@ impl<const D: usize> CrackLists<D> {
     /// pairs. The idea is the visibility criterion of the element-free Galerkin method
     /// (Belytschko, Lu & Gu 1994, IJNME 37, 229) and Spheral's three-point damaged coupling
     /// (Owen, LLNL), where a damaged point between two points cuts what passes between them.
+    ///
+    /// `candidates`: copies of some of the candidates ([`CrackLists::candidates`]) and where
+    /// i's lie in them.
     fn severs(
         &self,
         ij: (usize, usize),
         gather: Records<D>,
         joined: impl Fn(u32, u32) -> bool,
+        candidates: (&Candidates<D>, Range<usize>),
     ) -> Option<bool> {
         #[cfg(target_arch = "x86_64")]
         if self.wide {
             // SAFETY: the CPU has AVX2 (asserted in `build`).
-            return unsafe { self.severs_avx2(ij, gather, joined) };
+            return unsafe { self.severs_avx2(ij, gather, joined, candidates) };
         }
-        self.severs_in_lanes(ij, gather, joined)
+        self.severs_in_lanes(ij, gather, joined, candidates)
     }
 
     /// [`CrackLists::severs`] compiled for AVX2: four candidates at a time instead of two
@@ -1866,8 +1906,9 @@ impl<const D: usize> CrackLists<D> {
         ij: (usize, usize),
         gather: Records<D>,
         joined: impl Fn(u32, u32) -> bool,
+        candidates: (&Candidates<D>, Range<usize>),
     ) -> Option<bool> {
-        self.severs_in_lanes(ij, gather, joined)
+        self.severs_in_lanes(ij, gather, joined, candidates)
     }
 
     /// The body of [`CrackLists::severs`].
@@ -1877,18 +1918,20 @@ impl<const D: usize> CrackLists<D> {
         (i, j): (usize, usize),
         gather: Records<D>,
         joined: impl Fn(u32, u32) -> bool,
+        (candidates, at): (&Candidates<D>, Range<usize>),
     ) -> Option<bool> {
         let range = self.range(i);
+        debug_assert_eq!(at.len(), range.len(), "i's candidates");
         let (ga, gb) = (&gather[i.min(j)], &gather[i.max(j)]);
         let e: [f64; D] = std::array::from_fn(|a| gb.x[a] - ga.x[a]);
         let ee = dot(&e, &e);
         let (gi, gj) = (&gather[i], &gather[j]);
         debug_assert!(!gi.failed && !gj.failed);
-        let x: [&[f64]; D] = std::array::from_fn(|a| &self.x[a][range.clone()]);
+        let x: [&[f64]; D] = std::array::from_fn(|a| &candidates.x[a][at.clone()]);
         let (h, reach2, p) = (
-            &self.h[range.clone()],
-            &self.reach2[range.clone()],
-            &self.p[range.clone()],
+            &candidates.h[at.clone()],
+            &candidates.reach2[at.clone()],
+            &candidates.p[at],
         );
         // Candidate c between the two, but for its body. A zero ee gives t = NaN: no cut.
         // (A function, not a closure: the compiler did not inline the closure.)
@@ -2184,7 +2227,6 @@ mod tests {
     /// `joined` the bodies that meet.
     fn cracks_by_hand<const D: usize>(
         g: &[Gather<D>],
-        pressure: &[f64],
         joined: impl Fn(u32, u32) -> bool,
     ) -> CrackLists<D> {
         let mut cracks = CrackLists::<D>::default();
@@ -2196,9 +2238,27 @@ mod tests {
             }
             cracks.ends.push(cracks.items.len() as u32);
         }
-        cracks.copy_candidates(Records::whole(g), pressure);
         cracks.wide = wide_lanes();
         cracks
+    }
+
+    /// [`CrackLists::severs`] with i's candidates copied for it.
+    fn severs_by_lists<const D: usize>(
+        cracks: &CrackLists<D>,
+        (i, j): (usize, usize),
+        g: &[Gather<D>],
+        pressure: &[f64],
+        joined: impl Fn(u32, u32) -> bool,
+    ) -> Option<bool> {
+        let mut candidates = Candidates::default();
+        let range = cracks.range(i);
+        cracks.candidates(range.clone(), Records::whole(g), pressure, &mut candidates);
+        cracks.severs(
+            (i, j),
+            Records::whole(g),
+            joined,
+            (&candidates, 0..range.len()),
+        )
     }
 
     /// Severing by its definition ([`CrackLists::severs`]) over any list of particles that
@@ -2263,9 +2323,9 @@ mod tests {
                 severed_by_definition((1, 0), &[0, 2], &g, joined, &pressure),
             );
             assert_eq!(ij, ji);
-            let cracks = cracks_by_hand(&g, &pressure, joined);
-            assert_eq!(cracks.severs((0, 1), Records::whole(&g), joined), ij);
-            assert_eq!(cracks.severs((1, 0), Records::whole(&g), joined), ij);
+            let cracks = cracks_by_hand(&g, joined);
+            assert_eq!(severs_by_lists(&cracks, (0, 1), &g, &pressure, joined), ij);
+            assert_eq!(severs_by_lists(&cracks, (1, 0), &g, &pressure, joined), ij);
             ij
         };
         let cut = |k: Gather<2>, p_k: f64| {
@@ -2371,7 +2431,7 @@ mod tests {
                     joined,
                     &p.p,
                 );
-                let few = cracks.severs((i, j), Records::whole(&gather), joined);
+                let few = severs_by_lists(&cracks, (i, j), &gather, &p.p, joined);
                 assert_eq!(whole, few, "pair ({i}, {j})");
                 if let Some(open) = whole {
                     severed_pairs += 1;
