@@ -8,7 +8,7 @@
 //! ten million particles takes no longer than checking ten thousand.
 
 use crate::case::{Case, Motion};
-use crate::deck::estimate_particles;
+use crate::deck::estimate_case_particles;
 use crate::error::{Error, Result};
 use crate::material::Material;
 use crate::output::summary::Summary;
@@ -90,12 +90,7 @@ pub fn estimated_first_step(case: &Case) -> (f64, usize) {
 
 /// Validate a case and describe it (see the module doc).
 pub fn check(case: &Case) -> Result<String> {
-    let planes = crate::setup::symmetry_planes(case);
-    let estimated: Vec<f64> = case
-        .bodies
-        .iter()
-        .map(|b| estimate_particles(&b.shape, b.spacing, case.dimension, &planes))
-        .collect();
+    let estimated = estimate_case_particles(case);
     let total: f64 = estimated.iter().sum();
     let (dt, body) = estimated_first_step(case);
     if !(dt.is_finite() && dt > 0.0) {

@@ -11,7 +11,7 @@ use std::panic::{catch_unwind, AssertUnwindSafe};
 use std::path::{Path, PathBuf};
 use std::sync::mpsc;
 use std::time::Duration;
-use strike::deck::{estimate_particles, parse};
+use strike::deck::{estimate_case_particles, parse};
 use strike::run::{run, RunOptions};
 use strike::Error;
 
@@ -246,12 +246,7 @@ fn mutated_decks_give_clean_errors_or_results() {
                 continue;
             }
         };
-        let planes = strike::setup::symmetry_planes(&case);
-        let particles: f64 = case
-            .bodies
-            .iter()
-            .map(|b| estimate_particles(&b.shape, b.spacing, case.dimension, &planes))
-            .sum();
+        let particles: f64 = estimate_case_particles(&case).iter().sum();
         if particles > RUN_LIMIT {
             tally.too_large += 1;
             continue;

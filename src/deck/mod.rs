@@ -57,6 +57,16 @@ pub fn estimate_particles(
     share * whole_shape_particles(shape, spacing, dimension)
 }
 
+/// [`estimate_particles`] of each body of a case, with the case's symmetry planes: what
+/// `check` and the deck's tests read.
+pub fn estimate_case_particles(case: &Case) -> Vec<f64> {
+    let planes = crate::setup::symmetry_planes(case);
+    case.bodies
+        .iter()
+        .map(|b| estimate_particles(&b.shape, b.spacing, case.dimension, &planes))
+        .collect()
+}
+
 /// Expected ghosts of the bodies: their particles that the symmetry planes `planes` mirror
 /// ([`crate::setup::shapes::ghost_estimate`]), those within the ghost layers' reach at the
 /// start, (2 + skin) h of the largest spacing's h = `ratio` × spacing.

@@ -678,12 +678,7 @@ fn tables_without_headers() {
 fn estimated_particles_are_the_model_side_of_the_symmetry_planes() {
     let count = |text: &str| {
         let case = parse(text, "x.toml").unwrap();
-        let planes = crate::setup::symmetry_planes(&case);
-        let estimated: f64 = case
-            .bodies
-            .iter()
-            .map(|b| estimate_particles(&b.shape, b.spacing, case.dimension, &planes))
-            .sum();
+        let estimated: f64 = estimate_case_particles(&case).iter().sum();
         let (p, _) = crate::setup::build::<3>(&case).unwrap();
         (estimated, p.len() as f64)
     };
