@@ -112,10 +112,14 @@ pub struct Simulation<const D: usize> {
     /// Seconds this rank's last full search took, its exchanges included: what new ranges
     /// cost (see `lagging_rank`).
     rebuild: f64,
-    /// Steps of the last comparison of the ranks' loads, and of the last full search (when
-    /// the ranges were set).
+    /// Steps of the last comparison of the ranks' loads, and of the last full search that
+    /// set the ranges.
     balanced: u64,
     ranged: u64,
+    /// The ranges of the last measure of the ranks' loads over `BALANCE_EVERY` steps or
+    /// more, with each rank's seconds on its own over them, while the particles keep the
+    /// order they were measured in (see `measure`).
+    measured: Option<Measure>,
     /// The rank whose load was worth new ranges at the last comparison since the ranges were
     /// set (see `unbalanced`).
     lagging: Option<usize>,
@@ -375,6 +379,7 @@ impl<const D: usize> Simulation<D> {
             rebuild: 0.0,
             balanced: 0,
             ranged: 0,
+            measured: None,
             lagging: None,
             rebalances: 0,
         })
@@ -445,6 +450,15 @@ impl<const D: usize> Simulation<D> {
         self.lagging = lagging;
         self.rebalances += u64::from(early);
         early
+    }
+
+    /// The ranges and the ranks' seconds on them that this full search balances its new
+    /// ranges on (`balance_basis`), or `None` to keep the ranges and go on measuring them.
+    fn measure(&mut self, short: bool, reordered: bool) -> Option<Measure> {
+        let distributed = self.distributed();
+        let (ranks, parts, busy) = (self.ranks, &self.parts, &mut self.busy);
+        let fresh = || (parts.clone(), ranks.gather_each(std::mem::take(busy)));
+        balance_basis(&mut self.measured, fresh, (short, reordered, distributed))
     }
 
     /// Seconds spent in the exchanges between ranks so far (0 on one rank).
@@ -737,10 +751,18 @@ impl<const D: usize> Simulation<D> {
                 p.permute(&self.order);
                 self.state.last_reorder = self.state.step;
             }
-            let times = self.ranks.gather_each(std::mem::take(&mut self.busy));
-            let old = (&self.parts[..], &times[..]);
-            let order = reordered.then_some(&self.order[..]);
-            let parts = rebalance(self.ranks, p.n_real, &counts, old, order);
+            let n = p.n_real;
+            let window = self.state.step - self.ranged;
+            let measured = self.measure(distributed && window < BALANCE_EVERY, reordered);
+            let keep = measured.is_none();
+            let parts = match measured {
+                Some((ranges, times)) => {
+                    let order = reordered.then_some(&self.order[..]);
+                    rebalance(self.ranks, n, &counts, (&ranges, &times), order)
+                }
+                None => self.parts.clone(),
+            };
+            let p = &mut self.particles;
             let old = std::mem::replace(&mut self.parts, parts);
             // The permutation is needed by this step's halo under MPI (`moved`: who held each
             // particle), then not before the next reordering, 50 steps on: kept, it would hold
@@ -760,8 +782,10 @@ impl<const D: usize> Simulation<D> {
             self.neighbors.build(&p.x, h, p.n_real, skin);
             self.neighbors.classify(&p.body, false);
             self.stats.searches += 1;
-            self.ranged = self.state.step;
-            self.lagging = None;
+            if !keep {
+                self.ranged = self.state.step;
+                self.lagging = None;
+            }
         }
         self.searching += search.elapsed().as_secs_f64() - (self.exchanging - exchanged);
         if self.ranks.size() > 1 {
@@ -1160,6 +1184,44 @@ fn neighbour_counts<const D: usize>(
     counts
 }
 
+/// Ranges with each rank's seconds on its own share over them: what new ranges are balanced
+/// on (see `rebalance`).
+type Measure = (Vec<Range<usize>>, Vec<f64>);
+
+/// What a full search balances the new ranges on: the ranges and the ranks' seconds over the
+/// steps since they were set (`fresh`, which gathers them from every rank), or `None` to keep
+/// the ranges and go on measuring. A measure over fewer than `BALANCE_EVERY` steps (`short`: a
+/// full search for the lists' sake, or the reordering, just after another) is not taken: the
+/// step after a full search has no partial rebuilds, so its times leave out what the impact
+/// zone's rebuilds cost its rank. Until 2026-12-02 it was: in a trace of the sphere–plate demo
+/// on 2 ranks, a full search at step 99 balanced on 49 steps set 0..16 128 | 16 128..47 812,
+/// the reordering at step 100 set 0..22 272 on the times of that one step (0.022 against
+/// 0.036 s), and the early rebalance took to step 110 to undo it; late in the demo full
+/// searches come every 2–4 steps, each balanced on as few. The last measure over
+/// `BALANCE_EVERY` steps or more (`last`) is taken instead while the particles keep the order
+/// it was made in (a full search that does not reorder keeps it); after a reordering there is
+/// none, and a short measure keeps the ranges, unless this search reorders too (then the short
+/// measure is all there is). Every rank decides alike: the steps and reorderings are the same
+/// on all. Nothing is kept on one process (`distributed` false).
+fn balance_basis(
+    last: &mut Option<Measure>,
+    fresh: impl FnOnce() -> Measure,
+    (short, reordered, distributed): (bool, bool, bool),
+) -> Option<Measure> {
+    if short && !reordered && last.is_none() {
+        return None;
+    }
+    let fresh = fresh();
+    let chosen = match last.take() {
+        Some(kept) if short => kept,
+        _ => fresh,
+    };
+    if distributed && !reordered {
+        *last = Some(chosen.clone());
+    }
+    Some(chosen)
+}
+
 /// The ranks' ranges of the `n` real particles until the next full build (before it: the
 /// lists are built for them). Each particle weighs its neighbour count in the last pass
 /// (`counts`, by old index: the pass's cost) times the seconds per neighbour its rank took since the `old`
@@ -1305,6 +1367,50 @@ mod tests {
         );
         assert_eq!(lagging_rank(&[], 5, 45, 0.0, 0.0), None);
         assert_eq!(lagging_rank(&times, 0, 45, 0.0, 0.0), None);
+    }
+
+    /// A full search just after another does not balance on the one or few steps between
+    /// them: it takes the last measure over `BALANCE_EVERY` steps or more while the order it
+    /// was made in holds, and otherwise keeps the ranges (not even gathering the times),
+    /// unless it reorders itself. On one process nothing is kept.
+    #[test]
+    fn a_short_measure_does_not_set_the_ranges() {
+        let long: Measure = (vec![0..100, 100..300], vec![4.0, 2.0]);
+        let one_step: Measure = (vec![0..150, 150..300], vec![0.022, 0.036]);
+        let mut last = None;
+        let taken = || panic!("a kept range gathers no times");
+        // A full search at the end of 49 steps: its own measure, kept.
+        let basis = balance_basis(&mut last, || long.clone(), (false, false, true));
+        assert_eq!(basis.as_ref(), Some(&long));
+        assert_eq!(last.as_ref(), Some(&long));
+        // One step on, another (the lists') that does not reorder: the long one again.
+        let basis = balance_basis(&mut last, || one_step.clone(), (true, false, true));
+        assert_eq!(
+            basis.as_ref(),
+            Some(&long),
+            "one step's times would swing the ranges"
+        );
+        assert_eq!(last.as_ref(), Some(&long));
+        // The reordering one step on: still the long one, then nothing (a new order).
+        let basis = balance_basis(&mut last, || one_step.clone(), (true, true, true));
+        assert_eq!(basis.as_ref(), Some(&long));
+        assert_eq!(last, None);
+        // A short measure in the new order: the ranges stay, and the times go on adding up.
+        assert_eq!(balance_basis(&mut last, taken, (true, false, true)), None);
+        assert_eq!(last, None);
+        // ... until a reordering, where the short measure is all there is.
+        let basis = balance_basis(&mut last, || one_step.clone(), (true, true, true));
+        assert_eq!(basis.as_ref(), Some(&one_step));
+        assert_eq!(last, None);
+        // A long measure after a reordering is kept again; on one process never.
+        let basis = balance_basis(&mut last, || one_step.clone(), (false, false, true));
+        assert_eq!(
+            (basis.as_ref(), last.as_ref()),
+            (Some(&one_step), Some(&one_step))
+        );
+        let mut serial = None;
+        let basis = balance_basis(&mut serial, || long.clone(), (false, false, false));
+        assert_eq!((basis.as_ref(), serial), (Some(&long), None));
     }
 
     /// The ranks' ranges start at multiples of the sums' block, nearest the balanced split, so
