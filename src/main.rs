@@ -146,6 +146,7 @@ macro_rules! say {
 const EXIT_INTERRUPTED: u8 = 130;
 
 fn main() -> std::process::ExitCode {
+    strike::machine::map_large_allocations();
     // MPI first (where started by a launcher): the other ranks only log warnings and errors.
     let _mpi = strike::ranks::start();
     let ranks = Ranks::world();
