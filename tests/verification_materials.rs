@@ -98,8 +98,7 @@ fn flyer_plate_spall_gives_back_the_spall_strength() {
     // minimum 321.4 m/s, spall plane 2.4671 mm, and the acoustic readback itself −6.1 %.
     // Measured 2026-11-28: readback −4.6 / −2.6 %, minimum 287.9 / 302.0 m/s, plane 2.423 /
     // 2.473 mm at 20 / 10 µm (−11.5 / −14.3 % readback before the material update at the
-    // step's middle). At 1.5 GPa the readback is −10.6 / −13.0 %, as the independent
-    // solution's −16.9 / −11.5 % at the same cell sizes: held nowhere (README, Not yet).
+    // step's middle). At 1.5 GPa see `spall_at_1_5_gpa_reads_back_within_10_percent_at_5_um`.
     let (weak, u_min_weak, plane_weak) = (0.6e9, 321.4, 2.4671e-3);
     let text = std::fs::read_to_string(format!(
         "{}/examples/spall.toml",
@@ -144,6 +143,68 @@ fn flyer_plate_spall_gives_back_the_spall_strength() {
     assert!(
         u_min < 0.3 * u_max,
         "no spall, yet the free face stays at {u_min}"
+    );
+}
+
+/// Issue 13, item 6 (spall) at a stronger spall, σ_s = 1.5 GPa, past the elastic release
+/// range: there the spall cuts the steep plastic release short, and the acoustic relation
+/// needs a fine lattice. Measured 2026-12-02 at Δp = 10 / 5 µm (2D, 28 000 particles at 5 µm:
+/// about a minute on 2 cores):
+/// - readback −13.0 / −9.3 %: within 10 % at 5 µm, and closer than at 10;
+/// - free-face peak 369.5 / 381.1 m/s against the independent solution's 386.4;
+/// - pull-back minimum 218.9 / 224.0 m/s against its 224.2;
+/// - spall plane within 2 % of its 2.473 mm at both.
+///
+/// The independent solution is `python3 examples/spall_lagrangian_1d.py --cells-um 1
+/// --strengths-gpa 1.5`. Its own readback is −11.5 % at 10 µm cells and −6.4 % at 1 µm:
+/// that is the relation's error on this pulse, not SPH's.
+///
+/// At 20 µm the peak and minimum are 354.0 and 199.2 m/s. Both converge from there, but
+/// their difference, which the readback takes, reads −10.6 %: the readback is not monotone
+/// between 20 and 10 µm.
+#[test]
+fn spall_at_1_5_gpa_reads_back_within_10_percent_at_5_um() {
+    let (rho0, strong) = (2703.0, 1.5e9);
+    let (u_min_ref, plane_ref) = (224.2, 2.473e-3);
+    let c0 = ((rho0 * 5240.0f64.powi(2) + 4.0 / 3.0 * 27.6e9) / rho0).sqrt();
+    let text = std::fs::read_to_string(format!(
+        "{}/examples/spall.toml",
+        env!("CARGO_MANIFEST_DIR")
+    ))
+    .unwrap();
+    let deck = text.replace("spall_strength = 1.0e9", "spall_strength = 1.5e9");
+    assert_ne!(deck, text, "the deck's spall strength moved");
+    let error = |x: f64, reference: f64| (x / reference - 1.0).abs();
+    let mut read = Vec::new();
+    for refine in [0.5, 0.25] {
+        let mut case = strike::deck::parse(&deck, "spall.toml").unwrap();
+        for b in &mut case.bodies {
+            b.spacing *= refine;
+        }
+        let run = spall_run(&case).unwrap();
+        let (u_max, u_min) = pull_back(&run.free_face);
+        let (sigma, plane) = (0.5 * rho0 * c0 * (u_max - u_min), spall_plane(&run));
+        println!(
+            "spall at 1.5 GPa, Δp = {:.1e} m: {u_max:.1} → {u_min:.1} m/s, ½ ρ0 c0 Δu = {:.3} GPa ({:+.2} %), plane {:.4} mm ({:+.2} %), {} failed",
+            case.bodies[1].spacing,
+            sigma * 1e-9,
+            100.0 * (sigma / strong - 1.0),
+            plane * 1e3,
+            100.0 * (plane / plane_ref - 1.0),
+            run.failed_x0.len()
+        );
+        assert!(error(plane, plane_ref) < 0.02, "1.5 GPa: plane at {plane}");
+        read.push((error(sigma, strong), error(u_min, u_min_ref)));
+    }
+    let ((sigma_10, min_10), (sigma_5, min_5)) = (read[0], read[1]);
+    assert!(sigma_5 < 0.10, "1.5 GPa read back {sigma_5:.3} off at 5 µm");
+    assert!(
+        sigma_5 < sigma_10,
+        "1.5 GPa: the readback does not converge: {read:?}"
+    );
+    assert!(
+        min_5 < 0.02 && min_5 < min_10,
+        "1.5 GPa: the pull-back minimum does not converge on the independent solution's: {read:?}"
     );
 }
 
