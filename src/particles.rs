@@ -239,6 +239,7 @@ impl<const D: usize> Particles<D> {
     /// Append the states of particles `idx` to `out`, field by field: the message of a halo
     /// exchange (`ranks::Plan`), read back by [`Particles::unpack`] on the other rank.
     pub fn pack(&self, idx: &[u32], out: &mut Vec<u8>) {
+        out.reserve(idx.len() * state_bytes::<D>());
         macro_rules! pack {
             ($($f:ident),*) => { $(for &i in idx { out.extend_from_slice(bytes_of(&self.$f[i as usize])); })* };
         }
@@ -257,6 +258,7 @@ impl<const D: usize> Particles<D> {
     /// [`Particles::pack`] of the positions and smoothing lengths only: what another rank's
     /// neighbour refresh reads of the particles near its own (`Simulation`'s position plan).
     pub fn pack_positions(&self, idx: &[u32], out: &mut Vec<u8>) {
+        out.reserve(idx.len() * (std::mem::size_of::<Vector<D>>() + std::mem::size_of::<f64>()));
         for &i in idx {
             out.extend_from_slice(bytes_of(&self.x[i as usize]));
         }

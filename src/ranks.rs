@@ -207,18 +207,42 @@ impl Ranks {
         if self.size == 1 {
             return;
         }
-        let out: Vec<Vec<T>> = plan
+        // One buffer for all the messages, read back in place: a message a rank in vectors
+        // of its own, joined and split again around the all-to-all, copied every record
+        // twice more.
+        let mut flat: Vec<T> = Vec::new();
+        let counts: Vec<usize> = plan
             .send
             .iter()
             .map(|idx| {
-                let mut message = Vec::new();
-                pack(state, idx, &mut message);
-                message
+                let before = flat.len();
+                pack(state, idx, &mut flat);
+                flat.len() - before
             })
             .collect();
-        for (idx, got) in plan.recv.iter().zip(self.all_to_all(&out)) {
-            unpack(state, idx, &got);
+        let (got, got_counts) = self.all_to_all_flat(&flat, &counts);
+        let mut rest = &got[..];
+        for (idx, &c) in plan.recv.iter().zip(&got_counts) {
+            let (message, after) = rest.split_at(c);
+            rest = after;
+            unpack(state, idx, message);
         }
+    }
+
+    /// [`Ranks::all_to_all`] from one buffer, `counts[r]` records to rank r in turn; returns
+    /// the records received, in rank order, and how many came from each (on one rank the
+    /// buffer comes back).
+    fn all_to_all_flat<T: Copy>(&self, flat: &[T], counts: &[usize]) -> (Vec<T>, Vec<usize>) {
+        if self.size == 1 {
+            return (flat.to_vec(), counts.to_vec());
+        }
+        #[cfg(feature = "mpi")]
+        return exchange::all_to_all_flat(flat, counts);
+        #[cfg(not(feature = "mpi"))]
+        unreachable!(
+            "more than one rank without the mpi feature ({})",
+            counts.len()
+        );
     }
 
     /// [`Ranks::exchange`] of one value a particle: the `values` of the particles of
@@ -506,14 +530,31 @@ mod exchange {
     /// All-to-all of variable length: `out[r]` to rank r, and back what each rank sent this
     /// one, as opaque records (plain data of this same program on every rank).
     pub fn all_to_all<T: Copy>(out: &[Vec<T>]) -> Vec<Vec<T>> {
+        let counts: Vec<usize> = out.iter().map(Vec::len).collect();
+        let (got, got_counts) = all_to_all_flat(&out.concat(), &counts);
+        let mut rest = &got[..];
+        got_counts
+            .iter()
+            .map(|&c| {
+                let (mine, after) = rest.split_at(c);
+                rest = after;
+                mine.to_vec()
+            })
+            .collect()
+    }
+
+    /// All-to-all of variable length from one buffer: the first `counts[0]` records of
+    /// `flat` to rank 0, the next `counts[1]` to rank 1, and so on; returns what the ranks
+    /// sent this one, in rank order in one buffer, and how many records came from each.
+    pub fn all_to_all_flat<T: Copy>(flat: &[T], counts: &[usize]) -> (Vec<T>, Vec<usize>) {
         let world = mpi::topology::SimpleCommunicator::world();
         let record = UserDatatype::contiguous(
             std::mem::size_of::<T>() as mpi::Count,
             &u8::equivalent_datatype(),
         );
         let count = |n: usize| mpi::Count::try_from(n).expect("fewer than 2³¹ records a message");
-        let send_counts: Vec<mpi::Count> = out.iter().map(|o| count(o.len())).collect();
-        let mut recv_counts = vec![0 as mpi::Count; out.len()];
+        let send_counts: Vec<mpi::Count> = counts.iter().map(|&c| count(c)).collect();
+        let mut recv_counts = vec![0 as mpi::Count; counts.len()];
         world.all_to_all_into(&send_counts[..], &mut recv_counts[..]);
         let displs = |counts: &[mpi::Count]| -> Vec<mpi::Count> {
             counts
@@ -528,32 +569,27 @@ mod exchange {
         let (send_displs, recv_displs) = (displs(&send_counts), displs(&recv_counts));
         // Never an empty vector's dangling pointer: for one-byte records it is 0x1, which
         // OpenMPI reads as MPI_IN_PLACE (and refuses, MPI_ERR_ARG).
-        let mut flat: Vec<T> = Vec::with_capacity(out.iter().map(Vec::len).sum::<usize>().max(1));
-        for o in out {
-            flat.extend_from_slice(o);
-        }
+        let placeholder: Vec<T> = Vec::with_capacity(usize::from(flat.is_empty()));
+        let send_ptr = if flat.is_empty() {
+            placeholder.as_ptr()
+        } else {
+            flat.as_ptr()
+        };
         let total: usize = recv_counts.iter().map(|&c| c as usize).sum();
         let mut got: Vec<T> = Vec::with_capacity(total.max(1));
-        // SAFETY: the send buffer holds the records the counts say; the receive buffer has
-        // room for `total` records, which the all-to-all fills completely before `set_len`;
-        // a T is plain data (Copy), so its bytes may be copied between processes as they are.
+        // SAFETY: the send buffer holds the records the counts say (none where it is the
+        // placeholder); the receive buffer has room for `total` records, which the all-to-all
+        // fills completely before `set_len`; a T is plain data (Copy), so its bytes may be
+        // copied between processes as they are.
         unsafe {
-            let send = DynBuffer::from_raw(flat.as_ptr(), count(flat.len()), record.as_ref());
+            let send = DynBuffer::from_raw(send_ptr, count(flat.len()), record.as_ref());
             let mut recv = DynBufferMut::from_raw(got.as_mut_ptr(), count(total), record.as_ref());
             let send = Partition::new(&send, &send_counts[..], &send_displs[..]);
             let mut recv = PartitionMut::new(&mut recv, &recv_counts[..], &recv_displs[..]);
             world.all_to_all_varcount_into(&send, &mut recv);
             got.set_len(total);
         }
-        let mut rest = &got[..];
-        recv_counts
-            .iter()
-            .map(|&c| {
-                let (mine, after) = rest.split_at(c as usize);
-                rest = after;
-                mine.to_vec()
-            })
-            .collect()
+        (got, recv_counts.iter().map(|&c| c as usize).collect())
     }
 
     /// All-gather of the ranks' ranges of `v`, element by element as opaque bytes (the
