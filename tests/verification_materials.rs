@@ -7,6 +7,52 @@ use strike::validate::{pull_back, spall_plane, spall_run, SPALL_LAGRANGIAN_1D};
 mod support;
 use support::{example as load, two_resolutions, validated};
 
+/// Al 6061-T6's density and longitudinal wave speed c_L = √((K0 + 4G/3)/ρ0) in
+/// `examples/spall.toml`: the acoustic relation's (see the first spall test).
+const RHO0: f64 = 2703.0;
+fn c_l() -> f64 {
+    ((RHO0 * 5240.0f64.powi(2) + 4.0 / 3.0 * 27.6e9) / RHO0).sqrt()
+}
+
+/// `examples/spall.toml` with the spall strength `strength` (Pa) and `refine` times its
+/// spacing.
+fn spall_at(strength: f64, refine: f64) -> Case {
+    let text = std::fs::read_to_string(format!(
+        "{}/examples/spall.toml",
+        env!("CARGO_MANIFEST_DIR")
+    ))
+    .unwrap();
+    let set = format!("spall_strength = {strength:e}");
+    let deck = text.replace("spall_strength = 1.0e9", &set);
+    assert!(deck.contains(&set), "the deck's spall strength moved");
+    let mut case = strike::deck::parse(&deck, "spall.toml").unwrap();
+    for b in &mut case.bodies {
+        b.spacing *= refine;
+    }
+    case
+}
+
+/// The run of [`spall_at`], printed against the set strength and the independent solution's
+/// spall plane `plane_ref`: the free face's peak and pull-back minimum (m/s), the strength
+/// they read back, ½ ρ0 c_L Δu_fs (Pa), and the spall plane (m).
+fn spall_reading(strength: f64, refine: f64, plane_ref: f64) -> (f64, f64, f64, f64) {
+    let case = spall_at(strength, refine);
+    let run = spall_run(&case).unwrap();
+    let (u_max, u_min) = pull_back(&run.free_face);
+    let (sigma, plane) = (0.5 * RHO0 * c_l() * (u_max - u_min), spall_plane(&run));
+    println!(
+        "spall at {:.1} GPa, Δp = {:.1e} m: {u_max:.1} → {u_min:.1} m/s, ½ ρ0 c0 Δu = {:.3} GPa ({:+.2} %), plane {:.4} mm ({:+.2} %), {} failed",
+        strength * 1e-9,
+        case.bodies[1].spacing,
+        sigma * 1e-9,
+        100.0 * (sigma / strength - 1.0),
+        plane * 1e3,
+        100.0 * (plane / plane_ref - 1.0),
+        run.failed_x0.len()
+    );
+    (u_max, u_min, sigma, plane)
+}
+
 /// Issue 13, item 6 (spall): a flyer-plate impact spalls the target, and the free-face pull-back
 /// gives back the spall strength set in the deck, σ_s = ½ ρ0 c Δu_fs, within 10 %, at two
 /// resolutions (`examples/spall.toml`: a thin flyer, so that the pulse is triangular).
@@ -33,8 +79,7 @@ use support::{example as load, two_resolutions, validated};
 /// back towards rest.
 #[test]
 fn flyer_plate_spall_gives_back_the_spall_strength() {
-    let (rho0, sigma_s) = (2703.0, 1.0e9);
-    let c0 = ((rho0 * 5240.0f64.powi(2) + 4.0 / 3.0 * 27.6e9) / rho0).sqrt();
+    let (rho0, c0, sigma_s) = (RHO0, c_l(), 1.0e9);
     let (u_max_ref, u_min_ref, plane_ref) = SPALL_LAGRANGIAN_1D;
     // The free face's peak and minimum, the strength they read back, the spall plane.
     let read = |case: &Case| {
@@ -100,28 +145,9 @@ fn flyer_plate_spall_gives_back_the_spall_strength() {
     // 2.473 mm at 20 / 10 µm (−11.5 / −14.3 % readback before the material update at the
     // step's middle). At 1.5 GPa see `spall_at_1_5_gpa_reads_back_within_10_percent_at_5_um`.
     let (weak, u_min_weak, plane_weak) = (0.6e9, 321.4, 2.4671e-3);
-    let text = std::fs::read_to_string(format!(
-        "{}/examples/spall.toml",
-        env!("CARGO_MANIFEST_DIR")
-    ))
-    .unwrap();
-    let deck = text.replace("spall_strength = 1.0e9", "spall_strength = 0.6e9");
-    assert_ne!(deck, text, "the deck's spall strength moved");
     let mut minima = Vec::new();
     for refine in [1.0, 0.5] {
-        let mut case = strike::deck::parse(&deck, "spall.toml").unwrap();
-        for b in &mut case.bodies {
-            b.spacing *= refine;
-        }
-        let (u_max, u_min, sigma, plane, _) = read(&case);
-        println!(
-            "spall at 0.6 GPa, Δp = {:.1e} m: {u_max:.1} → {u_min:.1} m/s, ½ ρ0 c0 Δu = {:.3} GPa ({:+.2} %), plane {:.4} mm ({:+.2} %)",
-            case.bodies[1].spacing,
-            sigma * 1e-9,
-            100.0 * (sigma / weak - 1.0),
-            plane * 1e3,
-            100.0 * (plane / plane_weak - 1.0)
-        );
+        let (_, u_min, sigma, plane) = spall_reading(weak, refine, plane_weak);
         assert!(
             (sigma / weak - 1.0).abs() < 0.10,
             "0.6 GPa read back as {sigma:.3e}"
@@ -164,35 +190,12 @@ fn flyer_plate_spall_gives_back_the_spall_strength() {
 /// between 20 and 10 µm.
 #[test]
 fn spall_at_1_5_gpa_reads_back_within_10_percent_at_5_um() {
-    let (rho0, strong) = (2703.0, 1.5e9);
+    let strong = 1.5e9;
     let (u_min_ref, plane_ref) = (224.2, 2.473e-3);
-    let c0 = ((rho0 * 5240.0f64.powi(2) + 4.0 / 3.0 * 27.6e9) / rho0).sqrt();
-    let text = std::fs::read_to_string(format!(
-        "{}/examples/spall.toml",
-        env!("CARGO_MANIFEST_DIR")
-    ))
-    .unwrap();
-    let deck = text.replace("spall_strength = 1.0e9", "spall_strength = 1.5e9");
-    assert_ne!(deck, text, "the deck's spall strength moved");
     let error = |x: f64, reference: f64| (x / reference - 1.0).abs();
     let mut read = Vec::new();
     for refine in [0.5, 0.25] {
-        let mut case = strike::deck::parse(&deck, "spall.toml").unwrap();
-        for b in &mut case.bodies {
-            b.spacing *= refine;
-        }
-        let run = spall_run(&case).unwrap();
-        let (u_max, u_min) = pull_back(&run.free_face);
-        let (sigma, plane) = (0.5 * rho0 * c0 * (u_max - u_min), spall_plane(&run));
-        println!(
-            "spall at 1.5 GPa, Δp = {:.1e} m: {u_max:.1} → {u_min:.1} m/s, ½ ρ0 c0 Δu = {:.3} GPa ({:+.2} %), plane {:.4} mm ({:+.2} %), {} failed",
-            case.bodies[1].spacing,
-            sigma * 1e-9,
-            100.0 * (sigma / strong - 1.0),
-            plane * 1e3,
-            100.0 * (plane / plane_ref - 1.0),
-            run.failed_x0.len()
-        );
+        let (_, u_min, sigma, plane) = spall_reading(strong, refine, plane_ref);
         assert!(error(plane, plane_ref) < 0.02, "1.5 GPa: plane at {plane}");
         read.push((error(sigma, strong), error(u_min, u_min_ref)));
     }
