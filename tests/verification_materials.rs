@@ -2,7 +2,7 @@
 
 use strike::case::Case;
 use strike::simulation::Simulation;
-use strike::validate::{pull_back, spall_plane, spall_run, SPALL_LAGRANGIAN_1D};
+use strike::validate::{pull_back, spall_plane, spall_run, SpallRun, SPALL_LAGRANGIAN_1D};
 
 mod support;
 use support::{example as load, two_resolutions, validated};
@@ -32,24 +32,32 @@ fn spall_at(strength: f64, refine: f64) -> Case {
     case
 }
 
-/// The run of [`spall_at`], printed against the set strength and the independent solution's
-/// spall plane `plane_ref`: the free face's peak and pull-back minimum (m/s), the strength
-/// they read back, ½ ρ0 c_L Δu_fs (Pa), and the spall plane (m).
-fn spall_reading(strength: f64, refine: f64, plane_ref: f64) -> (f64, f64, f64, f64) {
-    let case = spall_at(strength, refine);
-    let run = spall_run(&case).unwrap();
+/// A flyer-plate run of `case`, printed against its set spall strength `strength` (Pa) and
+/// the independent solution's spall plane `plane_ref`: the free face's peak and pull-back
+/// minimum (m/s), the strength they read back, ½ ρ0 c_L Δu_fs (Pa), the spall plane (m), and
+/// the run.
+fn read_spall(case: &Case, strength: f64, plane_ref: f64) -> (f64, f64, f64, f64, SpallRun) {
+    let run = spall_run(case).unwrap();
     let (u_max, u_min) = pull_back(&run.free_face);
     let (sigma, plane) = (0.5 * RHO0 * c_l() * (u_max - u_min), spall_plane(&run));
     println!(
-        "spall at {:.1} GPa, Δp = {:.1e} m: {u_max:.1} → {u_min:.1} m/s, ½ ρ0 c0 Δu = {:.3} GPa ({:+.2} %), plane {:.4} mm ({:+.2} %), {} failed",
+        "spall at {:.1} GPa, Δp = {:.1e} m: {u_max:.1} → {u_min:.1} m/s, ½ ρ0 c0 Δu = {:.3} GPa ({:+.2} %), plane {:.4} mm ({:+.2} %), {} failed, momentum {:.1e}",
         strength * 1e-9,
         case.bodies[1].spacing,
         sigma * 1e-9,
         100.0 * (sigma / strength - 1.0),
         plane * 1e3,
         100.0 * (plane / plane_ref - 1.0),
-        run.failed_x0.len()
+        run.failed_x0.len(),
+        run.momentum_error
     );
+    (u_max, u_min, sigma, plane, run)
+}
+
+/// [`read_spall`] of [`spall_at`]`(strength, refine)`, without the run.
+fn spall_reading(strength: f64, refine: f64, plane_ref: f64) -> (f64, f64, f64, f64) {
+    let (u_max, u_min, sigma, plane, _) =
+        read_spall(&spall_at(strength, refine), strength, plane_ref);
     (u_max, u_min, sigma, plane)
 }
 
@@ -79,33 +87,13 @@ fn spall_reading(strength: f64, refine: f64, plane_ref: f64) -> (f64, f64, f64, 
 /// back towards rest.
 #[test]
 fn flyer_plate_spall_gives_back_the_spall_strength() {
-    let (rho0, c0, sigma_s) = (RHO0, c_l(), 1.0e9);
+    let sigma_s = 1.0e9;
     let (u_max_ref, u_min_ref, plane_ref) = SPALL_LAGRANGIAN_1D;
     // The free face's peak and minimum, the strength they read back, the spall plane.
-    let read = |case: &Case| {
-        let run = spall_run(case).unwrap();
-        let (u_max, u_min) = pull_back(&run.free_face);
-        let plane = spall_plane(&run);
-        (u_max, u_min, 0.5 * rho0 * c0 * (u_max - u_min), plane, run)
-    };
-    let mut results = Vec::new();
-    for case in two_resolutions("spall") {
-        let dp = case.bodies[1].spacing;
-        let (u_max, u_min, sigma, plane, run) = read(&case);
-        println!(
-            "spall, Δp = {dp:.1e} m: u_fs max {u_max:.1} m/s ({:+.2} %), pull-back to {u_min:.1} m/s ({:+.2} %), ½ ρ0 c0 Δu = {:.3} GPa (set {:.3}), {:+.2} %; {} failed particles, spall plane at {:.4} mm ({:+.2} %); momentum {:.1e}",
-            100.0 * (u_max / u_max_ref - 1.0),
-            100.0 * (u_min / u_min_ref - 1.0),
-            sigma * 1e-9,
-            sigma_s * 1e-9,
-            100.0 * (sigma / sigma_s - 1.0),
-            run.failed_x0.len(),
-            plane * 1e3,
-            100.0 * (plane / plane_ref - 1.0),
-            run.momentum_error
-        );
-        results.push((u_max, u_min, sigma, plane, run));
-    }
+    let results: Vec<_> = two_resolutions("spall")
+        .iter()
+        .map(|case| read_spall(case, sigma_s, plane_ref))
+        .collect();
     let error = |x: f64, reference: f64| (x / reference - 1.0).abs();
     for (k, (u_max, u_min, sigma, plane, run)) in results.iter().enumerate() {
         let tolerance = if k == 0 { 0.10 } else { 0.08 };
