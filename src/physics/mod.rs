@@ -851,10 +851,27 @@ fn compute_rates_on<const D: usize, K: Kernel>(
         gather.reserve_exact(cap);
         gather.resize(cap, Gather::padding());
     }
-    tail.clear();
-    tail.reserve_exact(all + 1 - split);
-    tail.resize(all + 1 - split, Gather::padding());
-    build_records(p, ratio, split..all + 1, tail);
+    if tail.len() != all + 1 - split {
+        tail.clear();
+        tail.reserve_exact(all + 1 - split);
+        tail.resize(all + 1 - split, Gather::padding());
+    }
+    if any_failed {
+        // Only the records the evaluated lists can name: the pass and the crack lists read
+        // those of i and of the particles its list names, never another's. Under MPI that is a
+        // rank's own range and the span its lists reach (`named`), with the ghosts; the rest
+        // of `tail` keeps whatever it held, which nothing reads. Until 2026-12-02 every rank
+        // built every particle's record at each pass once one had failed.
+        let span = (first..last)
+            .map(|c| nl.named(c))
+            .filter(|r| !r.is_empty())
+            .fold(range.clone(), |a, r| a.start.min(r.start)..a.end.max(r.end));
+        let span = span.start..span.end.min(n);
+        build_records(p, ratio, span.clone(), &mut tail[span]);
+        build_records(p, ratio, n..all + 1, &mut tail[n..]);
+    } else {
+        build_records(p, ratio, split..all + 1, tail);
+    }
     particles.hold(range.clone());
     if contact_force.len() < n {
         contact_force.resize(n, Vector::zeros());
