@@ -797,8 +797,9 @@ fn compute_rates_on<const D: usize, K: Kernel>(
         "AVX2 pass asked for on a CPU without AVX2"
     );
     // The windows: runs of pages of the real particles evaluated here, and the range of real
-    // particles each needs (its own and those its lists name). The crack lists read any
-    // particle's record by its index: where a particle has failed, they are all held.
+    // particles each needs (its own and those its lists name). Where a particle has failed,
+    // the crack lists read records by index: one window, every record its lists can name
+    // held in `tail` (below).
     let n = p.n_real;
     let range = owned.start.min(n)..owned.end.min(n);
     let (first, last) = (range.start / PAGE, range.end.div_ceil(PAGE));
