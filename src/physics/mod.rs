@@ -815,9 +815,6 @@ fn compute_rates_on<const D: usize, K: Kernel>(
     let needs: Vec<Range<usize>> = windows
         .par_iter()
         .map(|w| {
-            if any_failed {
-                return 0..0;
-            }
             let (mut lo, mut hi) = (w.start * PAGE, (w.end * PAGE).min(n));
             for c in w.clone() {
                 let named = nl.named(c);
@@ -828,6 +825,13 @@ fn compute_rates_on<const D: usize, K: Kernel>(
             lo..hi
         })
         .collect();
+    // Where a particle has failed, there is one window: its need's records go to `tail`, and
+    // it holds none in the ring.
+    let in_tail = if any_failed {
+        needs.first().cloned().unwrap_or(0..0)
+    } else {
+        0..0
+    };
     let span = needs.iter().map(|r| r.len()).max().unwrap_or(0);
     let Rates {
         particles,
@@ -863,12 +867,7 @@ fn compute_rates_on<const D: usize, K: Kernel>(
         // rank's own range and the span its lists reach (`named`), with the ghosts; the rest
         // of `tail` keeps whatever it held, which nothing reads. Until 2026-12-02 every rank
         // built every particle's record at each pass once one had failed.
-        let span = (first..last)
-            .map(|c| nl.named(c))
-            .filter(|r| !r.is_empty())
-            .fold(range.clone(), |a, r| a.start.min(r.start)..a.end.max(r.end));
-        let span = span.start..span.end.min(n);
-        build_records(p, ratio, span.clone(), &mut tail[span]);
+        build_records(p, ratio, in_tail.clone(), &mut tail[in_tail]);
         build_records(p, ratio, n..all + 1, &mut tail[n..]);
     } else {
         build_records(p, ratio, split..all + 1, tail);
@@ -883,7 +882,7 @@ fn compute_rates_on<const D: usize, K: Kernel>(
     // The real records held.
     let mut held = 0..0;
     for (w, need) in windows.iter().zip(&needs) {
-        let need = need.clone();
+        let need = if any_failed { 0..0 } else { need.clone() };
         // What the last window held and this one needs stays where it is; the rest is built.
         if need.start >= held.start && need.start < held.end {
             build_ring(p, ratio, held.end.max(need.start)..need.end, gather);
