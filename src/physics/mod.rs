@@ -352,11 +352,13 @@ pub struct Rates<const D: usize> {
     gather: Vec<Gather<D>>,
     /// The records of the ghosts and the padding ([`Records`]).
     tail: Vec<Gather<D>>,
-    /// Per-particle artificial stress R (all particles, ghosts included, and a zero at the end
-    /// for the padding; empty when no material uses it).
+    /// Per-particle artificial stress R (an entry for every particle, ghosts included, and a
+    /// zero at the end for the padding; current for the particles the pass reads, see
+    /// [`fill_read`]; empty when no material uses it).
     art: Vec<Tensor<D>>,
-    /// (σ/ρ²) B per particle (CN-SPH; ghosts included, and a zero for the padding; empty in
-    /// conventional SPH): the particle's side of the pair force,
+    /// (σ/ρ²) B per particle (CN-SPH; ghosts included, and a zero for the padding, current for
+    /// the particles the pass reads as `art`; empty in conventional SPH): the particle's side
+    /// of the pair force,
     /// (σ_i/ρ_i²) B_i ∇W + (σ_j/ρ_j²) B_j ∇W. Apart from B, which only the particle itself
     /// reads (from the caller's array), so that a neighbour costs 9 numbers, not 18.
     sb: Vec<Matrix<D>>,
@@ -545,6 +547,34 @@ const LANES: usize = 4;
 /// meeting head-on then part within 0.6 % (±1 km/s) and 0.8 % (±3.5 km/s) of their speed. With
 /// the contact springs' factor 2 they lost 4 %, without the look-ahead 8 %.
 const BACKSTOP_STEP: f64 = 1.0;
+/// `values[i] = of(i)` for the real particles in `read` and the ghosts `n..all`, and `pad` at
+/// `all` (the padding record's); `values` is resized to `all + 1` first where it is not that
+/// long, and its other entries keep what they held.
+fn fill_read<T: Copy + Send + Sync>(
+    values: &mut Vec<T>,
+    all: usize,
+    (read, n): (&Range<usize>, usize),
+    of: impl Fn(usize) -> T + Sync,
+    pad: T,
+) {
+    if values.len() != all + 1 {
+        values.clear();
+        values.reserve_exact(all + 1);
+        values.resize(all + 1, pad);
+    }
+    let (real, ghosts) = values.split_at_mut(n);
+    let read = read.start.min(n)..read.end.min(n);
+    real[read.clone()]
+        .par_iter_mut()
+        .zip(read)
+        .for_each(|(v, i)| *v = of(i));
+    ghosts[..all - n]
+        .par_iter_mut()
+        .enumerate()
+        .for_each(|(k, v)| *v = of(n + k));
+    values[all] = pad;
+}
+
 /// The bytes of neighbour records the rate pass holds for a store of `n` real particles in
 /// cell order, each slab of cells holding n^((D−1)/D) of them (a cube's): while no particle has
 /// failed, the ring of one window and the two slabs either side of it, its length a power of
@@ -756,39 +786,6 @@ fn compute_rates_on<const D: usize, K: Kernel>(
         .materials
         .iter()
         .any(|m| m.artificial_stress.is_some());
-    out.sb.clear();
-    let cn = !corr.is_empty();
-    if cn {
-        assert_eq!(
-            corr.len(),
-            all,
-            "a correction for every particle, ghosts included"
-        );
-        out.sb.reserve_exact(all + 1);
-        out.sb.par_extend(
-            (0..all)
-                .into_par_iter()
-                .map(|i| matrix(&(p.stress(i) / (p.rho[i] * p.rho[i]) * corr[i]))),
-        );
-        out.sb.push(matrix(&Tensor::<D>::zeros()));
-    }
-    out.art.clear();
-    if any_art {
-        // In CN-SPH the artificial stress's side of the pair force is R B, as the stress's.
-        out.art.reserve_exact(all + 1);
-        out.art.par_extend((0..all).into_par_iter().map(|i| {
-            let r = match model.material_of(p.body[i]).artificial_stress {
-                Some(eps) => artificial_stress::tensor(&p.stress(i), p.rho[i], eps),
-                None => Tensor::<D>::zeros(),
-            };
-            if cn {
-                r * corr[i]
-            } else {
-                r
-            }
-        }));
-        out.art.push(Tensor::<D>::zeros());
-    }
     // Whether any pair may need cutting (`cut_pair`), and which failed particles may sever
     // each particle's pairs.
     let any_failed = p.damage.par_iter().any(|&d| d >= 1.0);
@@ -825,6 +822,48 @@ fn compute_rates_on<const D: usize, K: Kernel>(
             lo..hi
         })
         .collect();
+    // The (σ/ρ²) B and artificial stresses of the particles the pass reads: the real ones its
+    // windows need (their own and those their lists name) and the ghosts, and a zero for the
+    // padding. Under MPI the rest of each array keeps what it held, which nothing reads; until
+    // 2026-12-02 every rank built both for every particle at each pass.
+    let read = needs
+        .iter()
+        .fold(range.clone(), |a, r| a.start.min(r.start)..a.end.max(r.end));
+    let cn = !corr.is_empty();
+    if cn {
+        assert_eq!(
+            corr.len(),
+            all,
+            "a correction for every particle, ghosts included"
+        );
+        let sb_of = |i: usize| matrix(&(p.stress(i) / (p.rho[i] * p.rho[i]) * corr[i]));
+        fill_read(
+            &mut out.sb,
+            all,
+            (&read, n),
+            sb_of,
+            matrix(&Tensor::<D>::zeros()),
+        );
+    } else {
+        out.sb.clear();
+    }
+    if any_art {
+        // In CN-SPH the artificial stress's side of the pair force is R B, as the stress's.
+        let art_of = |i: usize| {
+            let r = match model.material_of(p.body[i]).artificial_stress {
+                Some(eps) => artificial_stress::tensor(&p.stress(i), p.rho[i], eps),
+                None => Tensor::<D>::zeros(),
+            };
+            if cn {
+                r * corr[i]
+            } else {
+                r
+            }
+        };
+        fill_read(&mut out.art, all, (&read, n), art_of, Tensor::<D>::zeros());
+    } else {
+        out.art.clear();
+    }
     // Where a particle has failed, there is one window: its need's records go to `tail`, and
     // it holds none in the ring.
     let in_tail = if any_failed {
