@@ -57,12 +57,24 @@ use crate::tensor::{
 use nalgebra::SVector;
 use rayon::prelude::*;
 
-/// Predict v^n = v^{n−½} + ½ Δt_{n−1} a^{n−1} for the real particles (prescribed bodies keep
-/// their velocity).
-pub fn predict_velocity<const D: usize>(p: &mut Particles<D>, model: &Model<D>, dt_prev: f64) {
+/// Predict v^n = v^{n−½} + ½ Δt_{n−1} a^{n−1} for the real particles in `range` (prescribed
+/// bodies keep their velocity): all of them in one process, an MPI rank's own (the others'
+/// come from their ranks with the halo, predicted there).
+pub fn predict_velocity<const D: usize>(
+    p: &mut Particles<D>,
+    model: &Model<D>,
+    dt_prev: f64,
+    range: std::ops::Range<usize>,
+) {
     let n = p.n_real;
-    let (v, rest) = (&mut p.v[..n], (&p.vh[..n], &p.a[..n], &p.body[..n]));
-    v.par_iter_mut().enumerate().for_each(|(i, vi)| {
+    let range = range.start.min(n)..range.end.min(n);
+    let start = range.start;
+    let (v, rest) = (
+        &mut p.v[range.clone()],
+        (&p.vh[..n], &p.a[..n], &p.body[..n]),
+    );
+    v.par_iter_mut().enumerate().for_each(|(k, vi)| {
+        let i = start + k;
         *vi = match model.body_prescribed[rest.2[i] as usize] {
             Some(v0) => v0,
             None => rest.0[i] + rest.1[i] * (0.5 * dt_prev),

@@ -676,7 +676,16 @@ impl<const D: usize> Simulation<D> {
         let unbalanced = self.unbalanced();
         let distributed = self.distributed();
         let p = &mut self.particles;
-        integrate::predict_velocity(p, &self.model, self.state.dt_prev);
+        // A rank predicts its own particles only: the others' come whole with the halo, or with
+        // a full search's migration, from the rank that owned them at the step's start (until
+        // 2026-12-02 every rank predicted every particle). Before the first search (a start or
+        // a restart) every rank holds and predicts every particle's state.
+        let predicted = if distributed {
+            self.parts[self.ranks.rank()].clone()
+        } else {
+            0..p.n_real
+        };
+        integrate::predict_velocity(p, &self.model, self.state.dt_prev, predicted);
         // Ghosts and neighbour lists are rebuilt when the skin is used up (positions are those
         // of the real particles with the old ghosts refreshed), and every REORDER_EVERY steps
         // at the latest, when the real particles are also put back in cell order. Ranks that
