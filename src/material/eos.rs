@@ -9,6 +9,11 @@ pub trait Eos: Send + Sync + std::fmt::Debug {
     fn pressure(&self, rho: f64, e: f64) -> f64;
     /// Isentropic bulk modulus K_s = ρ (∂p/∂ρ)_s = ρ (∂p/∂ρ)_e + (p/ρ)(∂p/∂e)_ρ (Pa).
     fn bulk_modulus(&self, rho: f64, e: f64) -> f64;
+    /// The compression μ = ρ/ρ0 − 1 at which the EOS's reference curve is singular, where it
+    /// has one (none by default).
+    fn singular_compression(&self) -> Option<f64> {
+        None
+    }
 }
 
 /// Linear EOS p = K (ρ/ρ0 − 1), for elastic test problems.
@@ -119,6 +124,31 @@ impl Eos for MieGruneisen {
         // (∂p/∂ρ)_e = slope/ρ0 ; (∂p/∂e)_ρ = (γ0 + a μ) ρ0.
         rho * slope / self.rho0 + p / rho * (self.gamma0 + self.a * mu) * self.rho0
     }
+
+    /// The smallest μ > 0 at which the denominator 1 − (S1 − 1) μ − S2 μ²/(μ+1) − S3 μ³/(μ+1)²
+    /// vanishes: the U_s = C + S1 u_p line's u_p → ∞ (μ = 1/(S1 − 1) for the linear fit; 1.18,
+    /// ρ = 2.18 ρ0, for nylon 6/6's S1 = 1.849). The fit means nothing near it. Found by a scan
+    /// in steps of 0.01 up to μ = 100 and bisection within the step where the sign changes.
+    fn singular_compression(&self) -> Option<f64> {
+        let den = |mu: f64| {
+            let mp1 = mu + 1.0;
+            1.0 - (self.s1 - 1.0) * mu
+                - self.s2 * mu * mu / mp1
+                - self.s3 * mu * mu * mu / (mp1 * mp1)
+        };
+        let step = 0.01;
+        let k = (1..=10_000).find(|&k| den(k as f64 * step) <= 0.0)?;
+        let (mut lo, mut hi) = ((k - 1) as f64 * step, k as f64 * step);
+        for _ in 0..60 {
+            let mid = 0.5 * (lo + hi);
+            if den(mid) > 0.0 {
+                lo = mid;
+            } else {
+                hi = mid;
+            }
+        }
+        Some(lo)
+    }
 }
 
 #[cfg(test)]
@@ -165,6 +195,32 @@ mod tests {
             -0.1 * m.rho0 * m.c0 * m.c0,
             max_relative = 1e-14
         );
+    }
+
+    /// The linear fit's singular compression is 1/(S1 − 1); with S2 the root of the quadratic.
+    #[test]
+    fn singular_compression_is_where_the_denominator_vanishes() {
+        let nylon = MieGruneisen {
+            rho0: 1140.0,
+            c0: 2570.0,
+            s1: 1.849,
+            ..al2024()
+        };
+        let mu = nylon.singular_compression().unwrap();
+        assert_relative_eq!(mu, 1.0 / 0.849, max_relative = 1e-12);
+        let quadratic = MieGruneisen {
+            s2: 0.5,
+            ..al2024()
+        };
+        let mu = quadratic.singular_compression().unwrap();
+        let den = 1.0 - 0.338 * mu - 0.5 * mu * mu / (mu + 1.0);
+        assert!(den.abs() < 1e-12, "{den}");
+        // S1 ≤ 1 with no S2, S3: no singularity.
+        let flat = MieGruneisen {
+            s1: 0.9,
+            ..al2024()
+        };
+        assert_eq!(flat.singular_compression(), None);
     }
 
     #[test]
