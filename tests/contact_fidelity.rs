@@ -209,6 +209,52 @@ fn mixing_counts_no_rubble_as_a_body() {
     assert_eq!(mixing(false, true), (0.0, 0), "a failed particle");
 }
 
+/// Two lone particles, a of library material `a.0` at x = 0.5 mm moving at `a.1` m/s along x
+/// and b of `b.0` at x = 2 mm moving at `b.1` (Δp = 1 mm, one particle a body), to `end_time`.
+fn lone_pair(end_time: f64, a: (&str, f64), b: (&str, f64)) -> Case {
+    parse(&format!(
+        r#"
+[simulation]
+dimension = 3
+end_time = {end_time:e}
+[materials.a]
+library = "{}"
+[materials.b]
+library = "{}"
+[[body]]
+name = "a"
+material = "a"
+spacing = 1.0e-3
+velocity = [{:e}, 0.0, 0.0]
+shape = {{ type = "box", min = [0.0, 0.0, 0.0], max = [1.0e-3, 1.0e-3, 1.0e-3] }}
+[[body]]
+name = "b"
+material = "b"
+spacing = 1.0e-3
+velocity = [{:e}, 0.0, 0.0]
+shape = {{ type = "box", min = [1.5e-3, 0.0, 0.0], max = [2.5e-3, 1.0e-3, 1.0e-3] }}
+"#,
+        a.0, b.0, a.1, b.1
+    ))
+}
+
+/// [`lone_pair`]'s case run to its end in each formulation: the formulation, the simulation
+/// at the end, its history and whether a ever stood at or past b.
+fn lone_pair_runs(case: &Case) -> Vec<(Formulation, Simulation<3>, Vec<Diagnostics>, bool)> {
+    FORMULATIONS
+        .into_iter()
+        .map(|formulation| {
+            let mut case = case.clone();
+            case.simulation.formulation = formulation;
+            let mut crossed = false;
+            let (sim, rows) = run::<3>(&case, case.simulation.end_time, |sim, _| {
+                crossed |= sim.particles.x[0][0] >= sim.particles.x[1][0];
+            });
+            (formulation, sim, rows, crossed)
+        })
+        .collect()
+}
+
 /// Two lone particles of different bodies meeting head-on at ±1 km/s: a single particle's
 /// colour stays below that of touching (V W(0) < c0), so only [`colour::backstop`] stands
 /// between them. They must turn back no closer than 0.5 Δp, never cross, and leave at the
@@ -217,34 +263,8 @@ fn mixing_counts_no_rubble_as_a_body() {
 /// turn at 0.38 Δp).
 #[test]
 fn lone_particles_do_not_pass_through_each_other() {
-    let case = parse(
-        r#"
-[simulation]
-dimension = 3
-end_time = 2.0e-6
-[materials.al]
-library = "al_2024_t4"
-[[body]]
-name = "a"
-material = "al"
-spacing = 1.0e-3
-velocity = [1000.0, 0.0, 0.0]
-shape = { type = "box", min = [0.0, 0.0, 0.0], max = [1.0e-3, 1.0e-3, 1.0e-3] }
-[[body]]
-name = "b"
-material = "al"
-spacing = 1.0e-3
-velocity = [-1000.0, 0.0, 0.0]
-shape = { type = "box", min = [1.5e-3, 0.0, 0.0], max = [2.5e-3, 1.0e-3, 1.0e-3] }
-"#,
-    );
-    for formulation in FORMULATIONS {
-        let mut case = case.clone();
-        case.simulation.formulation = formulation;
-        let mut crossed = false;
-        let (sim, rows) = run::<3>(&case, case.simulation.end_time, |sim, _| {
-            crossed |= sim.particles.x[0][0] >= sim.particles.x[1][0];
-        });
+    let case = lone_pair(2.0e-6, ("al_2024_t4", 1000.0), ("al_2024_t4", -1000.0));
+    for (formulation, sim, rows, crossed) in lone_pair_runs(&case) {
         assert_eq!(sim.particles.n_real, 2);
         let closest = rows
             .iter()
@@ -277,35 +297,8 @@ shape = { type = "box", min = [1.5e-3, 0.0, 0.0], max = [2.5e-3, 1.0e-3, 1.0e-3]
 /// +0.19 / +0.06 %, energy kept to 3.0e-3 / 1.6e-3).
 #[test]
 fn a_nylon_particle_meets_an_aluminium_one_at_10_km_s() {
-    let case = parse(
-        r#"
-[simulation]
-dimension = 3
-end_time = 1.0e-6
-[materials.nylon]
-library = "nylon_66"
-[materials.al]
-library = "al_2024_t4"
-[[body]]
-name = "a"
-material = "nylon"
-spacing = 1.0e-3
-velocity = [10000.0, 0.0, 0.0]
-shape = { type = "box", min = [0.0, 0.0, 0.0], max = [1.0e-3, 1.0e-3, 1.0e-3] }
-[[body]]
-name = "b"
-material = "al"
-spacing = 1.0e-3
-shape = { type = "box", min = [1.5e-3, 0.0, 0.0], max = [2.5e-3, 1.0e-3, 1.0e-3] }
-"#,
-    );
-    for formulation in FORMULATIONS {
-        let mut case = case.clone();
-        case.simulation.formulation = formulation;
-        let mut crossed = false;
-        let (sim, rows) = run::<3>(&case, case.simulation.end_time, |sim, _| {
-            crossed |= sim.particles.x[0][0] >= sim.particles.x[1][0];
-        });
+    let case = lone_pair(1.0e-6, ("nylon_66", 10_000.0), ("al_2024_t4", 0.0));
+    for (formulation, sim, rows, crossed) in lone_pair_runs(&case) {
         let (first, last) = (rows[0].total, rows[rows.len() - 1].total);
         let error = (last - first).abs() / first;
         let v = [sim.particles.v[0][0], sim.particles.v[1][0]];
