@@ -121,14 +121,14 @@ pub struct UniaxialCurve {
     end: (f64, f64),
 }
 
-/// The table step and end: beyond CAP the curve continues with its slope there (compression
-/// beyond 60 % is far past any Hugoniot state of a solid). Where the EOS's reference curve is
-/// singular sooner (a Mie–Grüneisen fit with S1 > 1.6: nylon 6/6's at ε = 0.541, ρ = 2.18 ρ0),
-/// the table ends at [`SINGULAR_SHARE`] of that strain instead: through the singularity the
-/// curve's stiffness spiked and fell again, and a nylon sphere at 7 or 10 km/s on aluminium
-/// (the demo's shapes, Δp = 30 µm) stopped at 3.7 ns as unstable, the backstop's look-ahead
-/// (`physics`, `BACKSTOP_STEP`) halving its step every 70 steps to 5e-16 s at a pair 0.64 Δp
-/// apart closing at 4.6 km/s, whose bulk step would have taken it to ε = 0.54.
+/// The table step and end: beyond CAP the curve continues with its slope there (compression beyond
+/// 60 % is far past any Hugoniot state of a solid). Where the EOS's reference curve is singular
+/// sooner (a linear Mie–Grüneisen fit with S1 > 1.5: nylon 6/6's at ε = 0.541, ρ = 2.18 ρ0), the
+/// table ends at [`SINGULAR_SHARE`] of that strain instead: through the singularity the curve's
+/// stiffness spiked and fell again, and a nylon sphere at 7 or 10 km/s on aluminium (the demo's
+/// shapes, Δp = 30 µm) stopped at 3.7 ns as unstable, the backstop's look-ahead (`physics`,
+/// `BACKSTOP_STEP`) halving its step every 70 steps to 5e-16 s at a pair 0.64 Δp apart closing at
+/// 4.6 km/s, whose bulk step would have taken it to ε = 0.54.
 const DE: f64 = 1e-3;
 const CAP: f64 = 0.6;
 /// The share of the EOS's singular strain at which the table ends where that is short of

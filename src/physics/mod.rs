@@ -547,6 +547,7 @@ const LANES: usize = 4;
 /// meeting head-on then part within 0.6 % (±1 km/s) and 0.8 % (±3.5 km/s) of their speed. With
 /// the contact springs' factor 2 they lost 4 %, without the look-ahead 8 %.
 const BACKSTOP_STEP: f64 = 1.0;
+
 /// `values[i] = of(i)` for the real particles in `read` and the ghosts `n..all`, and `pad` at
 /// `all` (the padding record's); `values` is resized to `all + 1` first where it is not that
 /// long, and its other entries keep what they held.
