@@ -115,41 +115,18 @@ impl LatticeColour {
 pub struct UniaxialCurve {
     /// Σ_u at ε = k ΔE, k = 0..=N.
     work: Vec<f64>,
-    /// The table's end ε = N ΔE ([`CAP`], or short of the EOS's singular compression).
-    cap: f64,
     /// σ_u and dσ_u/dε at the table's end, for ε beyond it.
     end: (f64, f64),
 }
 
-/// The table step and end: beyond CAP the curve continues with its slope there (compression beyond
-/// 60 % is far past any Hugoniot state of a solid). Where the EOS's reference curve is singular
-/// sooner (a linear Mie–Grüneisen fit with S1 > 1.5: nylon 6/6's at ε = 0.541, ρ = 2.18 ρ0), the
-/// table ends at [`SINGULAR_SHARE`] of that strain instead: through the singularity the curve's
-/// stiffness spiked and fell again, and a nylon sphere at 7 or 10 km/s on aluminium (the demo's
-/// shapes, Δp = 30 µm) stopped at 3.7 ns as unstable, the backstop's look-ahead (`physics`,
-/// `BACKSTOP_STEP`) halving its step every 70 steps to 5e-16 s at a pair 0.64 Δp apart closing at
-/// 4.6 km/s, whose bulk step would have taken it to ε = 0.54.
+/// The table step and end: beyond CAP the curve continues with its slope there (compression
+/// beyond 60 % is far past any Hugoniot state of a solid).
 const DE: f64 = 1e-3;
 const CAP: f64 = 0.6;
-/// The share of the EOS's singular strain at which the table ends where that is short of
-/// [`CAP`]: for a linear U_s–u_p fit, where the reference curve's denominator is 0.1 (its
-/// Hugoniot pressure 100 ρ0 C² ε, 365 GPa for nylon 6/6, whose 10 km/s impact on aluminium
-/// reaches about 0.46 on its Hugoniot).
-const SINGULAR_SHARE: f64 = 0.9;
 
 impl UniaxialCurve {
     pub fn new(m: &Material) -> Self {
-        // The EOS's singular strain ε_s = μ_s/(1 + μ_s), ε = 1 − ρ0/ρ.
-        let singular = m
-            .eos
-            .singular_compression()
-            .map_or(f64::INFINITY, |mu| SINGULAR_SHARE * mu / (1.0 + mu));
-        let n = if singular < CAP {
-            (singular / DE).floor() as usize
-        } else {
-            (CAP / DE).round() as usize
-        };
-        let cap = if singular < CAP { n as f64 * DE } else { CAP };
+        let n = (CAP / DE).round() as usize;
         let mut work = vec![0.0];
         for k in 0..n {
             // Simpson's rule over each step.
@@ -158,14 +135,14 @@ impl UniaxialCurve {
             work.push(work[k] + s);
         }
         let d = 1e-6;
-        let end = (stress(m, cap), (stress(m, cap) - stress(m, cap - d)) / d);
-        UniaxialCurve { work, cap, end }
+        let end = (stress(m, CAP), (stress(m, CAP) - stress(m, CAP - d)) / d);
+        UniaxialCurve { work, end }
     }
 
     /// (σ_u(ε), dσ_u/dε, Σ_u(ε)) for ε ≥ 0, with `m` the material the curve was made for.
     pub fn at(&self, m: &Material, eps: f64) -> (f64, f64, f64) {
-        if eps >= self.cap {
-            let x = eps - self.cap;
+        if eps >= CAP {
+            let x = eps - CAP;
             let (s, ds) = self.end;
             let w = self.work[self.work.len() - 1] + s * x + 0.5 * ds * x * x;
             return (s + ds * x, ds, w);
