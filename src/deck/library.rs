@@ -266,8 +266,10 @@ pub fn entries() -> Vec<Entry> {
             1140.0,                             // Marsh 1980 (LASL shock Hugoniot data)
             mie_gruneisen(2570.0, 1.849, 0.87), // Marsh 1980; γ0 Steinberg 1996 (nylon)
             StrengthSpec::Hydrodynamic,
-            DamageSpec::default(),
-            "Marsh 1980 (LASL Shock Hugoniot Data); γ0: Steinberg 1996",
+            // Pan et al. 2025 (Int. J. Mech. Sci. 110127), plate impact: PA66 0.23 GPa, the
+            // same up to 1.1 GPa of peak stress, brittle (PA6 0.18 GPa).
+            spall(0.23e9),
+            "Marsh 1980 (LASL Shock Hugoniot Data); γ0: Steinberg 1996; spall: Pan et al. 2025",
         ),
         entry(
             "basalt",
@@ -342,6 +344,7 @@ pub const REFERENCES: &[&str] = &[
     "Kanel et al. 2004: G. I. Kanel, S. V. Razorenov, V. E. Fortov, Shock-Wave Phenomena and the Properties of Condensed Matter, Springer 2004 (spall strengths)",
     "Howell & Ball 2002: B. P. Howell, G. J. Ball, A free-Lagrange augmented Godunov method for the simulation of elastic–plastic solids, J. Comput. Phys. 175 (2002) 128–167",
     "Marsh 1980: S. P. Marsh (ed.), LASL Shock Hugoniot Data, University of California Press 1980",
+    "Pan et al. 2025: R. C. Pan, B. X. Bie, Y. Cai, N. B. Zhang, L. Z. Chen, Y. X. Zhao, K. Li, H. W. Chai, L. Lu, S. N. Luo, Shock compression and spallation of polyamides 6 and 66, Int. J. Mech. Sci. (2025) 110127 (spall strengths of PA66 and PA6)",
     "Benz & Asphaug 1999: W. Benz, E. Asphaug, Catastrophic disruptions revisited, Icarus 142 (1999) 5–20",
     "DynELA: O. Pantalé, DynELA finite-element code documentation, Taylor-bar benchmark (42CrMo4)",
 ];
