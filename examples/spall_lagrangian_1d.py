@@ -102,26 +102,24 @@ def pull_back(trace):
 
 def lowest_after_rise(trace, rise=350.0):
     """The lowest free-face velocity after the face first passes `rise` (a square pulse)."""
-    after = [u for k, (_, u) in enumerate(trace) if max(v for _, v in trace[: k + 1]) > rise]
-    return min(after) if after else float("nan")
+    first = next((k for k, (_, u) in enumerate(trace) if u > rise), None)
+    return float("nan") if first is None else min(u for _, u in trace[first:])
 
 
 def main():
     ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
     ap.add_argument("--hydro", action="store_true", help="no strength (a fluid that spalls)")
     ap.add_argument("--cells-um", default="20,10,2,1", help="cell sizes in micrometres")
-    ap.add_argument("--strengths-gpa", default=None, help="spall strengths (0.6,1.0,1.5)")
+    ap.add_argument(
+        "--strengths-gpa", default=None, help="spall strengths (0.6,1.0,1.5; --nylon: 0.23)"
+    )
     ap.add_argument("--nylon", action="store_true", help="the library's nylon 6/6 (see above)")
     a = ap.parse_args()
     if a.nylon:
         globals().update(NYLON)
         a.hydro = True
-        if a.strengths_gpa is None:
-            a.strengths_gpa = "0.23"
-            if a.cells_um == "20,10,2,1":
-                a.cells_um = "20,10,5,2,1"
     if a.strengths_gpa is None:
-        a.strengths_gpa = "0.6,1.0,1.5"
+        a.strengths_gpa = "0.23" if a.nylon else "0.6,1.0,1.5"
     c_l = np.sqrt(C0**2 + (0.0 if a.hydro else 4.0 / 3.0 * G / RHO0))
     for sigma in (float(v) * 1e9 for v in a.strengths_gpa.split(",")):
         for dx in (float(v) * 1e-6 for v in a.cells_um.split(",")):

@@ -266,8 +266,8 @@ pub fn entries() -> Vec<Entry> {
             1140.0,                             // Marsh 1980 (LASL shock Hugoniot data)
             mie_gruneisen(2570.0, 1.849, 0.87), // Marsh 1980; γ0 Steinberg 1996 (nylon)
             StrengthSpec::Hydrodynamic,
-            // Pan et al. 2025 (Int. J. Mech. Sci. 110127), plate impact: PA66 0.23 GPa, the
-            // same up to 1.1 GPa of peak stress, brittle (PA6 0.18 GPa).
+            // Pan et al. 2025 (Int. J. Mech. Sci. 110127), plate impact: PA66 0.23 GPa, nearly
+            // constant up to 1.1 GPa of peak stress, brittle (PA6 0.18 GPa).
             spall(0.23e9),
             "Marsh 1980 (LASL Shock Hugoniot Data); γ0: Steinberg 1996; spall: Pan et al. 2025",
         ),
