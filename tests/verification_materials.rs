@@ -17,15 +17,24 @@ fn c_l() -> f64 {
 /// `examples/spall.toml` with the spall strength `strength` (Pa) and `refine` times its
 /// spacing.
 fn spall_at(strength: f64, refine: f64) -> Case {
-    let text = std::fs::read_to_string(format!(
+    let set = format!("spall_strength = {strength:e}");
+    let deck = spall_text().replace("spall_strength = 1.0e9", &set);
+    assert!(deck.contains(&set), "the deck's spall strength moved");
+    spall_case(&deck, refine)
+}
+
+/// The text of `examples/spall.toml`.
+fn spall_text() -> String {
+    std::fs::read_to_string(format!(
         "{}/examples/spall.toml",
         env!("CARGO_MANIFEST_DIR")
     ))
-    .unwrap();
-    let set = format!("spall_strength = {strength:e}");
-    let deck = text.replace("spall_strength = 1.0e9", &set);
-    assert!(deck.contains(&set), "the deck's spall strength moved");
-    let mut case = strike::deck::parse(&deck, "spall.toml").unwrap();
+    .unwrap()
+}
+
+/// A variant `deck` of `examples/spall.toml` with `refine` times its spacing.
+fn spall_case(deck: &str, refine: f64) -> Case {
+    let mut case = strike::deck::parse(deck, "spall.toml").unwrap();
     for b in &mut case.bodies {
         b.spacing *= refine;
     }
@@ -220,22 +229,14 @@ fn spall_at_1_5_gpa_reads_back_within_10_percent_at_5_um() {
 fn library_nylon_spalls_as_the_independent_solution_does() {
     let (rho0, c0, sigma_s, v0) = (1140.0, 2570.0, 0.23e9, 400.0);
     let (u_min_ref, plane_ref) = (257.6, 2.4538e-3);
-    let text = std::fs::read_to_string(format!(
-        "{}/examples/spall.toml",
-        env!("CARGO_MANIFEST_DIR")
-    ))
-    .unwrap();
-    let deck = text
+    let deck = spall_text()
         .replace("library = \"al_6061_t6\"", "library = \"nylon_66\"")
         .replace("damage = { type = \"spall\", spall_strength = 1.0e9 }", "")
         .replace("end_time = 1.2e-6", "end_time = 1.45e-6");
     assert!(deck.contains("nylon_66") && !deck.contains("spall_strength"));
     let mut errors = Vec::new();
     for refine in [1.0, 0.5] {
-        let mut case = strike::deck::parse(&deck, "spall_nylon.toml").unwrap();
-        for b in &mut case.bodies {
-            b.spacing *= refine;
-        }
+        let case = spall_case(&deck, refine);
         let run = spall_run(&case).unwrap();
         // The lowest free-face velocity after the face first passes 350 m/s.
         let rise = run.free_face.iter().position(|&(_, u)| u > 350.0);
