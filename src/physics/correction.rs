@@ -669,6 +669,30 @@ pub fn min_eigenvalue<const D: usize>(m: &Tensor<D>) -> f64 {
     }
 }
 
+/// The scatter matrix C = s − m ⊗ m / w of a weighted set of points (moments as in
+/// [`plane_normal`]), its smallest eigenvalue λ and the mean of its other eigenvalues.
+fn scatter<const D: usize>(w: f64, m: &[f64; D], s: &Tensor<D>) -> (Tensor<D>, f64, f64) {
+    let c = Tensor::<D>::from_fn(|a, b| s[(a, b)] - m[a] * m[b] / w);
+    let lambda = min_eigenvalue(&c);
+    let others = (c.trace() - lambda) / (D - 1).max(1) as f64;
+    (c, lambda, others)
+}
+
+/// How far a weighted set of points is from a plane (moments as in [`plane_normal`]): the
+/// scatter's smallest eigenvalue over the mean of the others, 0 on a plane, [`plane_normal`]
+/// giving up beyond 0.2; 1 where it is undefined (fewer than D points) and at most 1. It is the
+/// relative variance of the fitted plane's normal.
+pub fn roughness<const D: usize>(count: usize, w: f64, m: &[f64; D], s: &Tensor<D>) -> f64 {
+    if count < D || w <= 0.0 {
+        return 1.0;
+    }
+    let (_, lambda, others) = scatter(w, m, s);
+    if others.is_nan() || others <= 0.0 {
+        return 1.0;
+    }
+    (lambda.max(0.0) / others).min(1.0)
+}
+
 /// The unit normal of the plane that best fits a weighted set of points (least squares), from
 /// their moments about any origin: w = Σ w_k, m = Σ w_k d_k, s = Σ w_k d_k ⊗ d_k. It is the
 /// eigenvector of the smallest eigenvalue of the scatter matrix C = s − m ⊗ m / w; None where
@@ -684,9 +708,7 @@ pub fn plane_normal<const D: usize>(
     if count < D || w <= 0.0 {
         return None;
     }
-    let c = Tensor::<D>::from_fn(|a, b| s[(a, b)] - m[a] * m[b] / w);
-    let lambda = min_eigenvalue(&c);
-    let others = (c.trace() - lambda) / (D - 1).max(1) as f64;
+    let (c, lambda, others) = scatter(w, m, s);
     if others.is_nan() || others <= 0.0 || lambda > 0.2 * others {
         return None;
     }
@@ -761,6 +783,45 @@ mod tests {
     /// Gershgorin's bound lies below the smallest eigenvalue (equal for a diagonal matrix),
     /// the pivots' test says whether it exceeds a value, and the indicator is a lower bound on
     /// the same side of both thresholds.
+    /// A plane's points are smooth (roughness 0) and give its normal; an edge's (two
+    /// perpendicular faces) are rough and give none; too few points are rough.
+    #[test]
+    fn roughness_and_plane_normal() {
+        let moments = |pts: &[[f64; 3]]| {
+            let (mut m, mut s) = ([0.0; 3], Tensor::<3>::zeros());
+            for p in pts {
+                for a in 0..3 {
+                    m[a] += p[a];
+                    for b in 0..3 {
+                        s[(a, b)] += p[a] * p[b];
+                    }
+                }
+            }
+            (pts.len(), pts.len() as f64, m, s)
+        };
+        let mut face = Vec::new();
+        let mut edge = Vec::new();
+        for k in -2..=2 {
+            for l in -2..=2 {
+                face.push([k as f64, l as f64, 0.3]);
+                if l <= 0 {
+                    edge.push([k as f64, l as f64, 0.0]);
+                    edge.push([k as f64, 0.0, -l as f64]);
+                }
+            }
+        }
+        let (n, w, m, s) = moments(&face);
+        assert!(roughness::<3>(n, w, &m, &s) < 1e-12);
+        let normal = plane_normal::<3>(n, w, &m, &s).unwrap();
+        assert!((normal[2].abs() - 1.0).abs() < 1e-12, "{normal:?}");
+        let (n, w, m, s) = moments(&edge);
+        let r = roughness::<3>(n, w, &m, &s);
+        assert!(r > 0.2 && r <= 1.0, "{r}");
+        assert!(plane_normal::<3>(n, w, &m, &s).is_none());
+        let (n, w, m, s) = moments(&face[..2]);
+        assert_eq!(roughness::<3>(n, w, &m, &s), 1.0);
+    }
+
     #[test]
     fn gershgorin_bound_and_indicator() {
         let mut rnd = crate::validate::blocks::uniform(5);

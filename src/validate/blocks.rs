@@ -142,6 +142,11 @@ pub fn consistency(_fine: bool) -> Result<Outcome> {
 /// surface normal within 1°; in conventional SPH it strays by more than 3° on the perturbed
 /// lattice; the net contact force vanishes to 1e-12 of the sum of its magnitudes in both.
 ///
+/// A narrower block on a face (`pressed_blocks`' `narrow`): in CN-SPH the force on the pressed
+/// layers stays within 1° of the face's normal, on every particle within 5°, the narrower
+/// block's edges and corners included (with each side's normal counted alike, as until
+/// 2026-12-02, 5.6° and 41°; see [`colour::normal`]).
+///
 /// And the balance of a face in contact ([`face_layers`]): CN-SPH's two facing layers feel the
 /// net force that conventional SPH's do, within 0.05 of a layer's traction, at 5–35 % strain.
 pub fn contact_direction(_fine: bool) -> Result<Outcome> {
@@ -177,7 +182,7 @@ pub fn contact_direction(_fine: bool) -> Result<Outcome> {
     for law in ["colour", "paper"] {
         for jitter in [0.0, 0.1] {
             for f in [Formulation::Corrected, Formulation::Conventional] {
-                let (p, force) = pressed_blocks(f, jitter, law)?;
+                let (p, force) = pressed_blocks(f, jitter, law, false)?;
                 let biggest = force.iter().map(|f| f.norm()).fold(0.0, f64::max);
                 // Two supports from the side faces: nearer, a neighbour's normal sees the edge.
                 let inner = |x: f64| (5.0e-3..9.0e-3).contains(&x);
@@ -228,6 +233,61 @@ pub fn contact_direction(_fine: bool) -> Result<Outcome> {
                     )
                     .at_most(1e-12),
                 );
+            }
+        }
+    }
+    // Edges and corners on a face: the contact normal is the face's (`colour::normal`).
+    for law in ["colour", "paper"] {
+        for jitter in [0.0, 0.1] {
+            for f in [Formulation::Corrected, Formulation::Conventional] {
+                let (p, force) = pressed_blocks(f, jitter, law, true)?;
+                let biggest = force.iter().map(|f| f.norm()).fold(0.0, f64::max);
+                let worst = |share: f64| {
+                    (0..p.n_real)
+                        .filter(|&i| force[i].norm() > share * biggest)
+                        .map(|i| {
+                            (force[i][2].abs() / force[i].norm())
+                                .min(1.0)
+                                .acos()
+                                .to_degrees()
+                        })
+                        .fold(0.0, f64::max)
+                };
+                let s = format!(
+                    "{}, {law} law, lattice {}, a narrower block on a face",
+                    formulation_label(f),
+                    if jitter > 0.0 {
+                        "perturbed ±0.1 Δp"
+                    } else {
+                        "regular"
+                    }
+                );
+                let why = "a frictionless face pushes along its normal, on an edge or a corner too";
+                for (share, limit, what) in [
+                    (
+                        0.1,
+                        1.0,
+                        "the pressed layers (a tenth of the largest force or more)",
+                    ),
+                    (1e-3, 5.0, "every particle with a contact force"),
+                ] {
+                    let angle = Check::new(
+                        format!("worst angle of the contact force to the face's normal, {what}"),
+                        &s,
+                        worst(share),
+                        "°",
+                        why,
+                    );
+                    // Conventional SPH's colour law keeps the tangential part of −∇Φ, which
+                    // an edge tilts (43–45° on the pressed layers): the measure sees a tilt.
+                    checks.push(match f {
+                        Formulation::Corrected => angle.at_most(limit),
+                        Formulation::Conventional if law == "colour" && share > 0.01 => {
+                            angle.at_least(3.0)
+                        }
+                        Formulation::Conventional => angle.reported(0.0),
+                    });
+                }
             }
         }
     }
@@ -305,12 +365,19 @@ pub fn linear_field_errors<const D: usize>(n: usize, jitter: f64, which: &[usize
 /// Per-particle contact forces of two 3D blocks pressed together across a flat face
 /// (facing layers 0.7 Δp apart), in `formulation`, on a lattice perturbed by up to
 /// ±`jitter` Δp (the facing layers in their plane only, so that the face stays flat), with
-/// the contact `law`.
+/// the contact `law`. The upper block (body 1) is as wide as the lower one, or, `narrow`,
+/// 6 Δp wide over the lower one's middle, so that its edges and corners stand on a face.
 pub fn pressed_blocks(
     formulation: Formulation,
     jitter: f64,
     law: &str,
+    narrow: bool,
 ) -> Result<(Particles<3>, Vec<Vector<3>>)> {
+    let (lo, hi) = if narrow {
+        (4.0e-3, 10.0e-3)
+    } else {
+        (0.0, 14.0e-3)
+    };
     let deck = format!(
         r#"
 [simulation]
@@ -329,7 +396,7 @@ shape = {{ type = "box", min = [0.0, 0.0, 0.0], max = [14.0e-3, 14.0e-3, 6.0e-3]
 name = "b"
 material = "al"
 spacing = 1.0e-3
-shape = {{ type = "box", min = [0.0, 0.0, 5.7e-3], max = [14.0e-3, 14.0e-3, 11.7e-3] }}
+shape = {{ type = "box", min = [{lo:e}, {lo:e}, 5.7e-3], max = [{hi:e}, {hi:e}, 11.7e-3] }}
 [[interaction]]
 bodies = ["a", "b"]
 type = "contact"
