@@ -680,8 +680,8 @@ fn scatter<const D: usize>(w: f64, m: &[f64; D], s: &Tensor<D>) -> (Tensor<D>, f
 
 /// How far a weighted set of points is from a plane (moments as in [`plane_normal`]): the
 /// scatter's smallest eigenvalue over the mean of the others, 0 on a plane, [`plane_normal`]
-/// giving up beyond 0.2; 1 where it is undefined (fewer than D points) and at most 1. It is the
-/// relative variance of the fitted plane's normal.
+/// giving up beyond 0.2; 1 where it is undefined (fewer than D points) and at most 1. The
+/// square of the fitted normal's uncertainty in angle grows with it.
 pub fn roughness<const D: usize>(count: usize, w: f64, m: &[f64; D], s: &Tensor<D>) -> f64 {
     if count < D || w <= 0.0 {
         return 1.0;
@@ -780,9 +780,6 @@ mod tests {
         assert!((min_eigenvalue(&(Tensor::<3>::identity() * 0.7)) - 0.7).abs() < 1e-15);
     }
 
-    /// Gershgorin's bound lies below the smallest eigenvalue (equal for a diagonal matrix),
-    /// the pivots' test says whether it exceeds a value, and the indicator is a lower bound on
-    /// the same side of both thresholds.
     /// A plane's points are smooth (roughness 0) and give its normal; an edge's (two
     /// perpendicular faces) are rough and give none; too few points are rough.
     #[test]
@@ -822,6 +819,9 @@ mod tests {
         assert_eq!(roughness::<3>(n, w, &m, &s), 1.0);
     }
 
+    /// Gershgorin's bound lies below the smallest eigenvalue (equal for a diagonal matrix),
+    /// the pivots' test says whether it exceeds a value, and the indicator is a lower bound on
+    /// the same side of both thresholds.
     #[test]
     fn gershgorin_bound_and_indicator() {
         let mut rnd = crate::validate::blocks::uniform(5);
