@@ -49,7 +49,7 @@ use crate::kernel::Kernel;
 use crate::material::Material;
 use crate::neighbors::NeighborList;
 use crate::particles::{Particles, Tensor};
-use crate::physics::correction::{self, plane_normal, roughness, LAMBDA_SURFACE};
+use crate::physics::correction::{self, plane_normal, LAMBDA_SURFACE};
 use rayon::prelude::*;
 use std::ops::Range;
 
@@ -207,8 +207,8 @@ pub struct ColourState {
     /// The interface strain ε its colour reads (0 where it is not pressed).
     pub strain: f64,
     /// CN-SPH: how far its body's surface particles within its support are from a plane
-    /// ([`correction::roughness`]: 0 on a face, up to 1 at an edge or a corner), the relative
-    /// variance of `normal`'s direction; 0 in conventional SPH.
+    /// ([`correction::plane_normal`]: 0 on a face, up to 1 at an edge or a corner), which
+    /// weighs `normal` in a pair's ([`normal`]); 0 in conventional SPH.
     pub roughness: f64,
 }
 
@@ -342,8 +342,9 @@ pub fn states<const D: usize, K: Kernel>(
                 .unwrap_or_else(Tensor::<D>::identity);
             let corrected: [f64; D] =
                 std::array::from_fn(|a| (0..D).map(|k| b[(a, k)] * own[k]).sum());
-            rough = roughness(count, w, &m1, &m2);
-            let dir: [f64; D] = plane_normal(count, w, &m1, &m2)
+            let (plane, r) = plane_normal(count, w, &m1, &m2);
+            rough = r;
+            let dir: [f64; D] = plane
                 .map(|n| {
                     // Outwards: the side the (corrected) gradient points to.
                     let side: f64 = (0..D).map(|a| n[a] * corrected[a]).sum();

@@ -678,39 +678,31 @@ fn scatter<const D: usize>(w: f64, m: &[f64; D], s: &Tensor<D>) -> (Tensor<D>, f
     (c, lambda, others)
 }
 
-/// How far a weighted set of points is from a plane (moments as in [`plane_normal`]): the
-/// scatter's smallest eigenvalue over the mean of the others, 0 on a plane, [`plane_normal`]
-/// giving up beyond 0.2; 1 where it is undefined (fewer than D points) and at most 1. The
-/// square of the fitted normal's uncertainty in angle grows with it.
-pub fn roughness<const D: usize>(count: usize, w: f64, m: &[f64; D], s: &Tensor<D>) -> f64 {
-    if count < D || w <= 0.0 {
-        return 1.0;
-    }
-    let (_, lambda, others) = scatter(w, m, s);
-    if others.is_nan() || others <= 0.0 {
-        return 1.0;
-    }
-    (lambda.max(0.0) / others).min(1.0)
-}
-
 /// The unit normal of the plane that best fits a weighted set of points (least squares), from
 /// their moments about any origin: w = Σ w_k, m = Σ w_k d_k, s = Σ w_k d_k ⊗ d_k. It is the
 /// eigenvector of the smallest eigenvalue of the scatter matrix C = s − m ⊗ m / w; None where
 /// the points do not lie near a plane (fewer than D of them, or that eigenvalue above a fifth
 /// of the mean of the others: an edge or a corner of a body) or near a line. Its sign is
-/// arbitrary.
+/// arbitrary. With it comes the points' roughness: the scatter's smallest eigenvalue over the
+/// mean of the others, 0 on a plane, the normal given up beyond 0.2, at most 1 and 1 where it
+/// is undefined (fewer than D points); the square of the normal's uncertainty in angle grows
+/// with it.
 pub fn plane_normal<const D: usize>(
     count: usize,
     w: f64,
     m: &[f64; D],
     s: &Tensor<D>,
-) -> Option<[f64; D]> {
+) -> (Option<[f64; D]>, f64) {
     if count < D || w <= 0.0 {
-        return None;
+        return (None, 1.0);
     }
     let (c, lambda, others) = scatter(w, m, s);
-    if others.is_nan() || others <= 0.0 || lambda > 0.2 * others {
-        return None;
+    if others.is_nan() || others <= 0.0 {
+        return (None, 1.0);
+    }
+    let roughness = (lambda.max(0.0) / others).min(1.0);
+    if lambda > 0.2 * others {
+        return (None, roughness);
     }
     // The null direction of C − λI: in 2D perpendicular to its larger row, in 3D the largest
     // cross product of two of its rows.
@@ -751,9 +743,9 @@ pub fn plane_normal<const D: usize>(
     // mean's power where the points lie on a line (3D), and the normal then is undefined.
     let n = best2.sqrt();
     if n.is_nan() || n <= 0.04 * others.powi(D as i32 - 1) {
-        return None;
+        return (None, roughness);
     }
-    Some(std::array::from_fn(|a| best[a] / n))
+    (Some(std::array::from_fn(|a| best[a] / n)), roughness)
 }
 
 #[cfg(test)]
@@ -808,15 +800,16 @@ mod tests {
             }
         }
         let (n, w, m, s) = moments(&face);
-        assert!(roughness::<3>(n, w, &m, &s) < 1e-12);
-        let normal = plane_normal::<3>(n, w, &m, &s).unwrap();
+        let (normal, r) = plane_normal::<3>(n, w, &m, &s);
+        assert!(r < 1e-12);
+        let normal = normal.unwrap();
         assert!((normal[2].abs() - 1.0).abs() < 1e-12, "{normal:?}");
         let (n, w, m, s) = moments(&edge);
-        let r = roughness::<3>(n, w, &m, &s);
+        let (normal, r) = plane_normal::<3>(n, w, &m, &s);
         assert!(r > 0.2 && r <= 1.0, "{r}");
-        assert!(plane_normal::<3>(n, w, &m, &s).is_none());
+        assert!(normal.is_none());
         let (n, w, m, s) = moments(&face[..2]);
-        assert_eq!(roughness::<3>(n, w, &m, &s), 1.0);
+        assert_eq!(plane_normal::<3>(n, w, &m, &s), (None, 1.0));
     }
 
     /// Gershgorin's bound lies below the smallest eigenvalue (equal for a diagonal matrix),
