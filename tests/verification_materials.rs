@@ -330,18 +330,17 @@ fn steinberg_guinan_flows_at_its_shocked_state() {
 }
 
 /// Issue 13, items 5 and 6 (`strike validate --fine --case taylor --case taylor_walls`): the
-/// steel bar against the finite-element results at R0/Δp = 8 and 16, and the steel and copper
-/// bars on their `[[wall]]`, against their twin through the contact and on a fixed wall
+/// steel bar against the finite-element results at R0/Δp = 8 and 16; the steel and copper bars
+/// in CN-SPH on their `[[wall]]`, against their twin through the contact and on a fixed wall
 /// through the contact, agreeing within 2 % in final length and face diameter at R0/Δp = 16,
 /// the faces' disagreement not growing with refinement (reported at 8; the symmetry plane
-/// reported beside them), the copper bar within 4 % (length) and 5 % (face) of the published
-/// results at R0/Δp = 16. About an hour and a half on 2 cores:
-/// `cargo test --release --test verification_materials -- --ignored`. It fails today on the
-/// copper bar: through the contact its face is narrower than on the wall (README, Not yet),
-/// by 4.5 % against its twin and 4.9 % on a fixed wall at R0/Δp = 16 (9.5 and 7.0 % at 8);
-/// the steel bar's by 0.3 and 0.4 %, the lengths within 0.3 % at 16 (by hand, 2026-11-29).
+/// reported beside them); the copper bar on its wall in conventional SPH within 4 % (length)
+/// and 5 % (face) of the published results at R0/Δp = 16. By hand on 2026-12-02 the CN faces
+/// through the contact were −1.1 / −0.8 % (copper twin / fixed wall) and −0.8 / +1.1 % (steel)
+/// of the wall's at 16, the lengths within 0.5 %. About four hours on 2 cores:
+/// `cargo test --release --test verification_materials -- --ignored`.
 #[test]
-#[ignore = "long (the validation command), and failing: the copper bar's face through the contact is 4.5–4.9 % narrower than on the wall at R0/Δp = 16 (README, Not yet)"]
+#[ignore = "long (the validation command): about four hours on 2 cores"]
 fn taylor_bars_converge_and_their_walls_agree() {
     validated(strike::validate::taylor(true));
     validated(strike::validate::taylor_walls(true));
