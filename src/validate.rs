@@ -1381,7 +1381,7 @@ pub fn taylor_variants(deck: &str, spacing: f64) -> Result<Vec<(&'static str, Ca
 ///
 /// The copper bar against the published results is run in conventional SPH on its wall
 /// (length within 4 % and face within 5 % at R0/Δp = 16, reported at 8): CN-SPH's rod comes
-/// out +4.4 % long there. About 25 minutes at R0/Δp = 8 and three hours more with
+/// out +4.4 % long there. About 12 minutes at R0/Δp = 8 and three hours more with
 /// `fine` on 2 cores.
 pub fn taylor_walls(fine: bool) -> Result<Outcome> {
     let copper = (21.445e-3, 14.2e-3);
