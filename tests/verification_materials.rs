@@ -335,12 +335,13 @@ fn steinberg_guinan_flows_at_its_shocked_state() {
 /// through the contact, agreeing within 2 % in final length and face diameter at R0/Δp = 16,
 /// the faces' disagreement not growing with refinement (reported at 8; the symmetry plane
 /// reported beside them); the copper bar on its wall in conventional SPH within 4 % (length)
-/// and 5 % (face) of the published results at R0/Δp = 16. By hand on 2026-12-02 the CN faces
-/// through the contact were −1.1 / −0.8 % (copper twin / fixed wall) and −0.8 / +1.1 % (steel)
-/// of the wall's at 16, the lengths within 0.5 %. About four hours on 2 cores:
+/// and 5 % (face) of the published results at R0/Δp = 16. By hand on 2026-12-02 and 03 the CN
+/// faces through the contact were −2.07 / −0.8 % (copper twin / fixed wall) and −0.8 / +1.1 %
+/// (steel) of the wall's at 16, the lengths within 0.6 %: it fails by the copper twin, 0.07 %
+/// past the 2 %, converging (−4.0 % at 8). About four hours on 2 cores:
 /// `cargo test --release --test verification_materials -- --ignored`.
 #[test]
-#[ignore = "long (the validation command): about four hours on 2 cores"]
+#[ignore = "long (the validation command, about four hours on 2 cores), and failing: the copper twin's face in CN-SPH is −2.07 % of its wall's at R0/Δp = 16 (2 % asked)"]
 fn taylor_bars_converge_and_their_walls_agree() {
     validated(strike::validate::taylor(true));
     validated(strike::validate::taylor_walls(true));

@@ -487,10 +487,10 @@ pub const ROUGHNESS_FLOOR: f64 = 1e-3;
 /// against a flat face takes the face's normal, as a frictionless face pushes. With the plain
 /// difference the diagonal normal of a rod's rim standing on a fixed block pushed the rim
 /// inwards like a friction: the copper Taylor rod's face on a fixed block came out at 11.75 mm
-/// against 12.54 on its twin and 13.01 on the wall (R0/Δp = 8; with the weights 12.67 mm), and
-/// on a block pressed by a narrower one the force on the narrower one's pressed layers tilted
-/// by up to 5.6° from the face's normal, at its edges by up to 41° (with the weights 0.4° and
-/// 2.5°, `validate::blocks::contact_direction`).
+/// against 12.54 on its twin and 13.01 on the wall (R0/Δp = 8; with the weights 12.67 mm, the
+/// twin 12.49), and on a block pressed by a narrower one the force on the narrower one's
+/// pressed layers tilted by up to 5.6° from the face's normal, at its edges by up to 41° (with
+/// the weights 0.4° and 2.5°, `validate::blocks::contact_direction`).
 #[inline(always)]
 pub fn normal<const D: usize>(
     si: &ColourState,
