@@ -1087,14 +1087,19 @@ pub struct TaylorRun {
     pub profile: Vec<(f64, f64)>,
 }
 
+/// The steel Taylor bar's published final length and impact-face diameter (m), the middles of
+/// the finite-element results' ranges (26.52–26.56 and 11.15–11.22 mm).
+const STEEL_BAR: (f64, f64) = (26.54e-3, 11.185e-3);
+const STEEL_BAR_SOURCE: &str = "DynELA and Abaqus (Pantalé et al.), VALIDATION.md §F";
+
 /// The Taylor bar (`examples/taylor_bar.toml`): 42CrMo4 at 287 m/s onto a frictionless rigid
 /// wall (`[[wall]]`), quarter model, against the published finite-element results
 /// (DynELA and Abaqus): final length 26.52–26.56 mm within 2 %, impact-face diameter
 /// 11.15–11.22 mm within 10 % at R0/Δp = 8 and 5 % at 16 (`fine`; on the wall −4.0 and
 /// +3.9 %, on a symmetry plane −8.5 and −0.2 %).
 pub fn taylor(fine: bool) -> Result<Outcome> {
-    let (length, face) = (26.54e-3, 11.185e-3);
-    let source = "DynELA and Abaqus (Pantalé et al.), VALIDATION.md §F";
+    let (length, face) = STEEL_BAR;
+    let source = STEEL_BAR_SOURCE;
     let mut checks = Vec::new();
     let mut figures = Vec::new();
     let spacings: &[f64] = if fine { &[0.4e-3, 0.2e-3] } else { &[0.4e-3] };
@@ -1372,12 +1377,13 @@ pub fn taylor_variants(deck: &str, spacing: f64) -> Result<Vec<(&'static str, Ca
 /// diameter at R0/Δp = 16 (`fine`), and the face's disagreement does not grow with
 /// refinement; at 8 the figures are reported. CN-SPH's contact acts along the face's normal
 /// (`contact::colour::normal`), and through it the faces come out within 1.1 % of the wall's
-/// at 16 but for the copper twin's, −2.07 % (by hand, 2026-12-02 and 03: it fails by that). Conventional SPH's contact does not: its tangential part
-/// pushes the rim of a face inwards, the copper twin's face −4.5 % of the wall's and the fixed
-/// wall's −4.9 % at 16 (2026-11-29; README, Not yet), so it is not the formulation to compare
-/// walls in. On a symmetry plane, reported beside them: a symmetry plane is a wall that also
-/// pulls, and it holds the face in tension where the radial release meets on the axis
-/// (`boundary`), so it is the same problem only while the face is pressed.
+/// at 16 but for the copper twin's, −2.07 % (by hand, 2026-12-02 and 03: it fails by that).
+/// Conventional SPH's contact does worse: its tangential part pushes the rim of a face
+/// inwards, the copper twin's face −4.5 % of the wall's and the fixed wall's −4.9 % at 16
+/// (2026-11-29; README, Not yet), so it is not the formulation to compare walls in. On a
+/// symmetry plane, reported beside them: a symmetry plane is a wall that also pulls, and it
+/// holds the face in tension where the radial release meets on the axis (`boundary`), so it
+/// is the same problem only while the face is pressed.
 ///
 /// The copper bar against the published results is run in conventional SPH on its wall
 /// (length within 4 % and face within 5 % at R0/Δp = 16, reported at 8): CN-SPH's rod comes
@@ -1389,11 +1395,7 @@ pub fn taylor_walls(fine: bool) -> Result<Outcome> {
     let mut checks = Vec::new();
     let spacings: &[f64] = if fine { &[0.4e-3, 0.2e-3] } else { &[0.4e-3] };
     for (deck, published, cited) in [
-        (
-            "taylor_bar",
-            (26.54e-3, 11.185e-3),
-            "DynELA and Abaqus (Pantalé et al.)",
-        ),
+        ("taylor_bar", STEEL_BAR, STEEL_BAR_SOURCE),
         ("taylor_copper", copper, source),
     ] {
         // Each variant's face disagreement at the coarser spacing, for the convergence check
