@@ -678,15 +678,19 @@ fn scatter<const D: usize>(w: f64, m: &[f64; D], s: &Tensor<D>) -> (Tensor<D>, f
     (c, lambda, others)
 }
 
+/// The roughness (a scatter's smallest eigenvalue over the mean of its others) beyond which
+/// [`plane_normal`] gives the plane up: the points are an edge or a corner, not a face.
+pub const PLANE_ROUGHNESS: f64 = 0.2;
+
 /// The unit normal of the plane that best fits a weighted set of points (least squares), from
 /// their moments about any origin: w = Σ w_k, m = Σ w_k d_k, s = Σ w_k d_k ⊗ d_k. It is the
 /// eigenvector of the smallest eigenvalue of the scatter matrix C = s − m ⊗ m / w; None where
-/// the points do not lie near a plane (fewer than D of them, or that eigenvalue above a fifth
-/// of the mean of the others: an edge or a corner of a body) or near a line. Its sign is
-/// arbitrary. With it comes the points' roughness: the scatter's smallest eigenvalue over the
-/// mean of the others, 0 on a plane, the normal given up beyond 0.2, at most 1 and 1 where it
-/// is undefined (fewer than D points); the square of the normal's uncertainty in angle grows
-/// with it.
+/// the points do not lie near a plane (fewer than D of them, or that eigenvalue above
+/// [`PLANE_ROUGHNESS`] times the mean of the others: an edge or a corner of a body) or near a
+/// line. Its sign is arbitrary. With it comes the points' roughness: the scatter's smallest
+/// eigenvalue over the mean of the others, 0 on a plane, the normal given up beyond
+/// [`PLANE_ROUGHNESS`], at most 1 and 1 where it is undefined (fewer than D points); the
+/// square of the normal's uncertainty in angle grows with it.
 pub fn plane_normal<const D: usize>(
     count: usize,
     w: f64,
@@ -701,7 +705,7 @@ pub fn plane_normal<const D: usize>(
         return (None, 1.0);
     }
     let roughness = (lambda.max(0.0) / others).min(1.0);
-    if lambda > 0.2 * others {
+    if lambda > PLANE_ROUGHNESS * others {
         return (None, roughness);
     }
     // The null direction of C − λI: in 2D perpendicular to its larger row, in 3D the largest
