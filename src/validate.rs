@@ -1027,57 +1027,105 @@ fn converges(
     *previous = Some(error);
 }
 
-/// A Taylor-bar run at 80 µs: (final length, impact-face diameter, peak plastic strain, the
-/// rod's profile (z, largest radius) in bins of one spacing), lengths in m. The length runs
-/// over the rod's particles from the lowest to the highest plus one spacing (each particle
-/// stands for a cell Δp across); it overstates the length by up to Δp/2, the lowest layer being
-/// flattened. The face diameter is twice the largest radius among the particles within
-/// [`FACE_LAYER`] of the rod's lowest, plus one spacing.
+/// A Taylor-bar run at 80 µs, measured by [`taylor_measure`].
 pub fn taylor_run(case: &Case) -> Result<TaylorRun> {
     let mut sim = Simulation::<3>::new(case)?;
     run_to(&mut sim, case.simulation.end_time)?;
     let dp = case.bodies[0].spacing;
     let p = &sim.particles;
-    let rod: Vec<usize> = (0..p.n_real).filter(|&i| p.body[i] == 0).collect();
-    let z = |i: usize| p.x[i][2];
-    let radius = |i: usize| p.x[i][0].hypot(p.x[i][1]);
-    let lo = rod.iter().map(|&i| z(i)).fold(f64::INFINITY, f64::min);
-    let hi = rod.iter().map(|&i| z(i)).fold(f64::NEG_INFINITY, f64::max);
+    let rod: Vec<[f64; 2]> = (0..p.n_real)
+        .filter(|&i| p.body[i] == 0)
+        .map(|i| [p.x[i][2], p.x[i][0].hypot(p.x[i][1])])
+        .collect();
+    let eps = (0..p.n_real)
+        .filter(|&i| p.body[i] == 0)
+        .map(|i| p.eps_p[i])
+        .fold(0.0, f64::max);
+    Ok(TaylorRun {
+        eps,
+        ..taylor_measure(&rod, dp)
+    })
+}
+
+/// A rod's final length, impact-face diameter and profile from its particles' (height z,
+/// distance from the axis r) at spacing `dp` (m; `eps` is left 0). The rod runs from its foot's
+/// level to its top's plus one spacing (each particle stands for a cell Δp across; the
+/// flattened lowest layer makes it up to Δp/2 long). The face diameter is twice the largest r
+/// within [`FACE_LAYER`] of the foot's level, plus one spacing. The profile is the largest
+/// r + Δp/2 in bins of one spacing from the foot's level.
+///
+/// Each level is a [`LEVEL_QUANTILE`] of the particles within two spacings of the rod's end
+/// (the lowest tenth for the foot), not that end's single particle: one particle off its layer
+/// must not carry the measure with it. Until 2026-12-03 the foot was the lowest particle; at
+/// R0/Δp = 16 the copper twin's (CN-SPH) lay 0.046 mm below the plane between the rods, 0.42 Δp
+/// under the next, where the two faces undulate into each other near the axis, and its rim
+/// 1.35 Δp above it fell out of the face: 14.02 mm read for the 14.29 of its layer (−2.07 %
+/// of the wall's for −0.2 %).
+pub fn taylor_measure(rod: &[[f64; 2]], dp: f64) -> TaylorRun {
+    let mut z: Vec<f64> = rod.iter().map(|p| p[0]).collect();
+    z.sort_by(f64::total_cmp);
+    let (Some(&lowest), Some(&highest)) = (z.first(), z.last()) else {
+        return TaylorRun::default();
+    };
+    let foot = {
+        let near: Vec<f64> = z
+            .iter()
+            .copied()
+            .take_while(|&v| v < lowest + 2.0 * dp)
+            .collect();
+        near[(LEVEL_QUANTILE * (near.len() - 1) as f64).round() as usize]
+    };
+    let top = {
+        let near: Vec<f64> = z
+            .iter()
+            .rev()
+            .copied()
+            .take_while(|&v| v > highest - 2.0 * dp)
+            .collect();
+        near[(LEVEL_QUANTILE * (near.len() - 1) as f64).round() as usize]
+    };
     let r_face = rod
         .iter()
-        .filter(|&&i| z(i) < lo + FACE_LAYER * dp)
-        .map(|&i| radius(i))
+        .filter(|p| p[0] < foot + FACE_LAYER * dp)
+        .map(|p| p[1])
         .fold(0.0, f64::max);
-    let eps = rod.iter().map(|&i| p.eps_p[i]).fold(0.0, f64::max);
-    let bins = ((hi - lo) / dp).ceil() as usize + 1;
+    let bins = ((highest - lowest) / dp).ceil() as usize + 1;
     let mut prof = vec![0.0_f64; bins];
-    for &i in &rod {
-        let k = ((z(i) - lo) / dp).floor() as usize;
-        prof[k.min(bins - 1)] = prof[k.min(bins - 1)].max(radius(i) + 0.5 * dp);
+    for p in rod {
+        let k = (((p[0] - foot) / dp).floor().max(0.0) as usize).min(bins - 1);
+        prof[k] = prof[k].max(p[1] + 0.5 * dp);
     }
     let profile = prof
         .iter()
         .enumerate()
-        .map(|(k, r)| (lo + (k as f64 + 0.5) * dp, *r))
+        .map(|(k, r)| (foot + (k as f64 + 0.5) * dp, *r))
         .collect();
-    Ok(TaylorRun {
-        length: hi - lo + dp,
+    TaylorRun {
+        length: top - foot + dp,
         face: 2.0 * r_face + dp,
-        eps,
+        eps: 0.0,
         profile,
-    })
+    }
 }
 
-/// How far above the rod's lowest particle [`taylor_run`] looks for the face's rim, in
-/// spacings: one whole spacing, the height of a particle's cell, so that the lowest layer's
-/// particles are in it where the layer is not flat. Until 2026-11-29 it was 0.6 Δp, and a
-/// single particle pressed onto the wall on the axis (the copper benchmark's on its `[[wall]]`
-/// at R0/Δp = 16, 0.2 µm off it) put the rim, 0.68 Δp above that particle, out of reach: the
-/// face read 14.02 mm for a rim at 14.40, and the walls' disagreement −1.95 % for −4.5 %. From
-/// 0.75 Δp to 2 Δp the copper benchmark's three faces read the same at R0/Δp = 8 and 16.
+/// The quantile of the particles within two spacings of a rod's end that [`taylor_measure`]
+/// takes for that end's level: the lowest tenth at the foot, the highest at the top. Within two
+/// spacings of the foot lie two layers of the face, some 170 particles each at R0/Δp = 8 in
+/// the quarter model, so a tenth lies inside the lowest layer and a few particles off it do
+/// not move it.
+pub const LEVEL_QUANTILE: f64 = 0.1;
+
+/// How far above the foot's level [`taylor_measure`] looks for the face's rim, in spacings: one
+/// whole spacing, the height of a particle's cell, so that the lowest layer's particles are in
+/// it where the layer is not flat. Until 2026-11-29 it was 0.6 Δp, and a single particle
+/// pressed onto the wall on the axis (the copper benchmark's on its `[[wall]]` at R0/Δp = 16,
+/// 0.2 µm off it) put the rim, 0.68 Δp above that particle, out of reach: the face read
+/// 14.02 mm for a rim at 14.40, and the walls' disagreement −1.95 % for −4.5 %. From 0.75 Δp
+/// to 2 Δp the copper benchmark's three faces read the same at R0/Δp = 8 and 16.
 pub const FACE_LAYER: f64 = 1.0;
 
 /// What [`taylor_run`] measures (m).
+#[derive(Clone, Debug, Default)]
 pub struct TaylorRun {
     pub length: f64,
     pub face: f64,

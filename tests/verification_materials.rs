@@ -288,6 +288,66 @@ fn taylor_bar_final_length_matches_the_finite_element_results() {
     validated(strike::validate::taylor(false));
 }
 
+/// The Taylor rod's measure (`validate::taylor_measure`) reads a mushroomed rod of known
+/// shape: a quarter lattice (Δp = 0.2 mm) 100 layers high, radius 3.2 mm, on a face layer
+/// 7 mm in radius whose rim is lifted 0.7 Δp (as a rim off its wall is). Face 14 mm and length
+/// 100 Δp within a spacing; and so they stay with one particle of the face 0.42 Δp below its
+/// layer near the axis, as the copper twin's was at R0/Δp = 16 in CN-SPH (2026-12-03), where a
+/// face measured from the lowest particle misses the rim (checked here too: the rod sees the
+/// failure it guards).
+#[test]
+fn taylor_measure_reads_a_known_rod_and_no_single_particle_moves_it() {
+    let dp = 0.2e-3;
+    let centre = |k: usize| (k as f64 + 0.5) * dp;
+    let mut rod = Vec::new();
+    for i in 0..40 {
+        for j in 0..40 {
+            let r = centre(i).hypot(centre(j));
+            for k in 0..100 {
+                let (z, within) = match k {
+                    0 if r > 5.0e-3 => (centre(0) + 0.7 * dp, r <= 7.0e-3),
+                    0 => (centre(0), true),
+                    _ => (centre(k), r <= 3.2e-3),
+                };
+                if within {
+                    rod.push([z, r]);
+                }
+            }
+        }
+    }
+    let rim = rod.iter().map(|p| p[1]).fold(0.0, f64::max);
+    for stray in [false, true] {
+        let mut rod = rod.clone();
+        if stray {
+            let k = rod.iter().position(|p| p[0] == centre(0)).unwrap();
+            rod[k][0] -= 0.42 * dp;
+            let lowest = rod[k][0];
+            let from_lowest = rod
+                .iter()
+                .filter(|p| p[0] < lowest + dp)
+                .map(|p| p[1])
+                .fold(0.0, f64::max);
+            assert!(from_lowest < 0.8 * rim, "the stray does not hide the rim");
+        }
+        let m = strike::validate::taylor_measure(&rod, dp);
+        eprintln!(
+            "stray {stray}: face {} mm, length {} mm",
+            m.face * 1e3,
+            m.length * 1e3
+        );
+        assert!(
+            (m.face - 14.0e-3).abs() < dp,
+            "stray {stray}: face {}",
+            m.face
+        );
+        assert!(
+            (m.length - 100.0 * dp).abs() < dp,
+            "stray {stray}: length {}",
+            m.length
+        );
+    }
+}
+
 /// Issue 13, item 6 (the copper Taylor test; `strike validate --case taylor_ofhc`): Johnson &
 /// Cook's OFHC copper rod (25.4 × 7.62 mm) at 190 m/s on the anvil (a `[[wall]]`) with the
 /// library's Johnson–Cook constants, against the recovered rod (L_f/L0 = 0.638,
