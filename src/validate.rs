@@ -1033,14 +1033,12 @@ pub fn taylor_run(case: &Case) -> Result<TaylorRun> {
     run_to(&mut sim, case.simulation.end_time)?;
     let dp = case.bodies[0].spacing;
     let p = &sim.particles;
-    let rod: Vec<[f64; 2]> = (0..p.n_real)
-        .filter(|&i| p.body[i] == 0)
-        .map(|i| [p.x[i][2], p.x[i][0].hypot(p.x[i][1])])
+    let ids: Vec<usize> = (0..p.n_real).filter(|&i| p.body[i] == 0).collect();
+    let rod: Vec<[f64; 2]> = ids
+        .iter()
+        .map(|&i| [p.x[i][2], p.x[i][0].hypot(p.x[i][1])])
         .collect();
-    let eps = (0..p.n_real)
-        .filter(|&i| p.body[i] == 0)
-        .map(|i| p.eps_p[i])
-        .fold(0.0, f64::max);
+    let eps = ids.iter().map(|&i| p.eps_p[i]).fold(0.0, f64::max);
     Ok(TaylorRun {
         eps,
         ..taylor_measure(&rod, dp)
@@ -1067,23 +1065,15 @@ pub fn taylor_measure(rod: &[[f64; 2]], dp: f64) -> TaylorRun {
     let (Some(&lowest), Some(&highest)) = (z.first(), z.last()) else {
         return TaylorRun::default();
     };
-    let foot = {
-        let near: Vec<f64> = z
-            .iter()
-            .copied()
-            .take_while(|&v| v < lowest + 2.0 * dp)
+    // The LEVEL_QUANTILE of the heights within two spacings of an end, from that end.
+    let level = |from_end: &mut dyn Iterator<Item = f64>, end: f64| {
+        let near: Vec<f64> = from_end
+            .take_while(|&v| (v - end).abs() < 2.0 * dp)
             .collect();
         near[(LEVEL_QUANTILE * (near.len() - 1) as f64).round() as usize]
     };
-    let top = {
-        let near: Vec<f64> = z
-            .iter()
-            .rev()
-            .copied()
-            .take_while(|&v| v > highest - 2.0 * dp)
-            .collect();
-        near[(LEVEL_QUANTILE * (near.len() - 1) as f64).round() as usize]
-    };
+    let foot = level(&mut z.iter().copied(), lowest);
+    let top = level(&mut z.iter().rev().copied(), highest);
     let r_face = rod
         .iter()
         .filter(|p| p[0] < foot + FACE_LAYER * dp)
