@@ -1415,7 +1415,8 @@ pub fn taylor_variants(deck: &str, spacing: f64) -> Result<Vec<(&'static str, Ca
 /// diameter at R0/Δp = 16 (`fine`), and the face's disagreement does not grow with
 /// refinement; at 8 the figures are reported. CN-SPH's contact acts along the face's normal
 /// (`contact::colour::normal`), and through it the faces come out within 1.1 % of the wall's
-/// at 16 but for the copper twin's, −2.07 % (by hand, 2026-12-02 and 03: it fails by that).
+/// at 16 (by hand, 2026-12-02 and 03; the copper twin −0.13 % since the face measure's foot
+/// level and the contact's tie at touching, [`crate::contact::colour::TOUCHING_TIE`]).
 /// Conventional SPH's contact does worse: its tangential part pushes the rim of a face
 /// inwards, the copper twin's face −4.5 % of the wall's and the fixed wall's −4.9 % at 16
 /// (2026-11-29; README, Not yet), so it is not the formulation to compare walls in. On a

@@ -215,7 +215,7 @@ fn mixing_counts_no_rubble_as_a_body() {
 /// by more than round-off ([`colour::TOUCHING_TIE`]). Until 2026-12-03 the round-off of the
 /// colour sums gave the interface's damping to some pairs at the first step and not to their
 /// mirror images: 9e-5 Δp (conventional) and 3e-5 Δp (CN-SPH) out of symmetry after six steps
-/// here, and the Taylor twins' faces undulating into each other near the axis.
+/// here.
 #[test]
 fn twins_laid_out_touching_stay_mirror_images() {
     for formulation in FORMULATIONS {

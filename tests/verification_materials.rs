@@ -280,7 +280,7 @@ fn library_nylon_spalls_as_the_independent_solution_does() {
 
 /// Issue 13, item 6 (Taylor bar, Johnson–Cook; `strike validate --case taylor`): 42CrMo4 at
 /// 287 m/s on a frictionless rigid wall (the `[[wall]]` z = 0), quarter model, R0/Δp = 8,
-/// against the finite-element results: the final length within 2 % (26.96 mm, +1.6 %) and the
+/// against the finite-element results: the final length within 2 % (26.89 mm, +1.3 %) and the
 /// impact-face diameter within 10 % at this coarse resolution (−4.5 % here, +3.8 % at
 /// R0/Δp = 16: [`taylor_bars_converge_and_their_walls_agree`]; 2026-11-29).
 #[test]
@@ -395,13 +395,14 @@ fn steinberg_guinan_flows_at_its_shocked_state() {
 /// through the contact, agreeing within 2 % in final length and face diameter at R0/Δp = 16,
 /// the faces' disagreement not growing with refinement (reported at 8; the symmetry plane
 /// reported beside them); the copper bar on its wall in conventional SPH within 4 % (length)
-/// and 5 % (face) of the published results at R0/Δp = 16. By hand on 2026-12-02 and 03 the CN
-/// faces through the contact were −2.07 / −0.8 % (copper twin / fixed wall) and −0.8 / +1.1 %
-/// (steel) of the wall's at 16, the lengths within 0.6 %: it fails by the copper twin, 0.07 %
-/// past the 2 %, converging (−4.0 % at 8). About four hours on 2 cores:
+/// and 5 % (face) of the published results at R0/Δp = 16. By hand on 2026-12-03 with the face
+/// measure's foot level, the CN faces through the contact at 16 read −0.13 % (copper twin,
+/// with the contact's tie at touching broken), −0.79 % (copper fixed block) and −0.79 % (steel
+/// twin, before the tie) of the wall's, the lengths within 0.4 %; the steel fixed block read
+/// +1.1 % with the old measure. About four hours on 2 cores:
 /// `cargo test --release --test verification_materials -- --ignored`.
 #[test]
-#[ignore = "long (the validation command, about four hours on 2 cores); not yet re-run whole since the face measure's foot level of 2026-12-03 (the copper twin then read −2.07 % of its wall's face, now −0.19 %)"]
+#[ignore = "long (the validation command, about four hours on 2 cores); not re-run whole since the face measure's foot level and the contact's touching tie of 2026-12-03 (its variants by hand: within 0.8 % at R0/Δp = 16)"]
 fn taylor_bars_converge_and_their_walls_agree() {
     validated(strike::validate::taylor(true));
     validated(strike::validate::taylor_walls(true));
