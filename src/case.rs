@@ -96,6 +96,8 @@ pub struct Simulation {
     /// h = h0 (ρ0/ρ)^(1/D) min(max(λ_max, 1), s_max) (default 1.25; 1 switches it off; see
     /// `integrate::smoothing_length`).
     pub smoothing_stretch: f64,
+    /// δ of the density diffusion in the continuity equation (0: none; see `physics`).
+    pub density_diffusion: f64,
     /// Impact speed for default contact stiffness; None: the largest relative speed of the bodies.
     pub impact_speed: Option<f64>,
 }
@@ -324,6 +326,10 @@ impl Case {
                     "alpha {:?}, beta {:?}, limiter {:?}",
                     s.viscosity_alpha, s.viscosity_beta, s.viscosity_limiter
                 ),
+            ),
+            (
+                "simulation.density_diffusion".into(),
+                format!("{:?}", s.density_diffusion),
             ),
             ("simulation.gravity".into(), format!("{:?}", s.gravity)),
             (

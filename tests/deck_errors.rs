@@ -487,3 +487,19 @@ fn viscosity_limiter_out_of_range() {
     let case = parse(&deck.replace("-0.1", "0.0"), "good.toml").unwrap();
     assert_eq!(case.simulation.viscosity_limiter, 0.0);
 }
+
+/// The density diffusion's δ is checked and named with its line.
+#[test]
+fn density_diffusion_out_of_range() {
+    let deck = edit(
+        "end_time = 2.0e-7",
+        "end_time = 2.0e-7\ndensity_diffusion = 1.5",
+    );
+    let (message, help) = deck_error(&deck, "simulation.density_diffusion", 4);
+    assert!(message.contains("[0, 1]"), "{message}");
+    assert!(help.contains("0.1 is usual"), "{help}");
+    let case = parse(&deck.replace("1.5", "0.1"), "good.toml").unwrap();
+    assert_eq!(case.simulation.density_diffusion, 0.1);
+    let case = parse(&deck.replace("density_diffusion = 1.5\n", ""), "good.toml").unwrap();
+    assert_eq!(case.simulation.density_diffusion, 0.0);
+}

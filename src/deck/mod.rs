@@ -972,6 +972,17 @@ impl Ctx<'_> {
             )?,
             None => 1.25,
         };
+        let density_diffusion = match &s.density_diffusion {
+            Some(d) => self.check(
+                d,
+                "simulation.density_diffusion",
+                |x| (0.0..=1.0).contains(&x),
+                "must be in [0, 1]",
+                "δ of the density diffusion (Molteni & Colagrossi 2009): 0.1 is usual, 0 \
+                 switches it off (the default)",
+            )?,
+            None => 0.0,
+        };
         let impact_speed = match &s.impact_speed {
             Some(v) => Some(self.positive(
                 v,
@@ -997,6 +1008,7 @@ impl Ctx<'_> {
                 h_min_ratio,
                 h_max_ratio,
                 smoothing_stretch,
+                density_diffusion,
                 impact_speed,
             },
         ))

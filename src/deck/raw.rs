@@ -167,6 +167,7 @@ pub struct Simulation {
     pub gravity: Option<S<Vec<f64>>>,
     pub smoothing_bounds: Option<S<Vec<f64>>>,
     pub smoothing_stretch: Option<S<f64>>,
+    pub density_diffusion: Num,
     pub impact_speed: Num,
 }
 

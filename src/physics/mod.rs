@@ -13,6 +13,12 @@
 //!   conserved by the spatial discretisation (DESIGN.md §2 allows it in place of σ:D/ρ);
 //!   plus the lagged correction −½ Σ m_j (u_i − u_j)·(T_ij ∇_i W_ij) (see `integrate`).
 //!
+//! - density diffusion (`density_diffusion` = δ, default 0): dρ_i/dt += δ Σ_{j∈N_i} h_ij c_ij
+//!   ψ_ij·∇_i W_ij V_j, ψ_ij = 2 (ρ_j − ρ_i) x_ji/|x_ji|² (Molteni & Colagrossi 2009, Comput.
+//!   Phys. Commun. 180, 861; [`diffusion_term`]), on the plain ∇W in both formulations, as the
+//!   viscosity is: it damps the density noise of heavy plastic flow, whose tensile tail a
+//!   failure model would read as tension (README, "Failure in heavy plastic flow")
+//!
 //! N_i are neighbours of the same body or of a `welded` body, and a wall's images of these
 //! while pressed against them ([`PairRule::Wall`], see `boundary`); C_i, neighbours of a body
 //! in `contact`, enter only through [`crate::contact`] (the paper's W = 0 across bodies).
@@ -134,6 +140,8 @@ pub struct Model<const D: usize> {
     pub h_max_ratio: f64,
     /// The most h grows with the material's stretch (see `integrate::smoothing_length`).
     pub smoothing_stretch: f64,
+    /// δ of the density diffusion (module doc; 0: none).
+    pub density_diffusion: f64,
     /// The colour contact law's tables, where a pair of bodies uses it.
     pub colour: Option<ColourLaw>,
     /// Conventional SPH, or CN-SPH's corrected gradients.
@@ -1029,6 +1037,8 @@ struct LaneSums<const D: usize> {
     acc: [[f64; LANES]; D],
     grad_v: [[[f64; LANES]; D]; D],
     drho: [f64; LANES],
+    /// The density diffusion's sum (before δ).
+    diff: [f64; LANES],
     de: [f64; LANES],
     de_lag: [f64; LANES],
     mu_max: [f64; LANES],
@@ -1041,6 +1051,7 @@ impl<const D: usize> LaneSums<D> {
             acc: [[0.0; LANES]; D],
             grad_v: [[[0.0; LANES]; D]; D],
             drho: [0.0; LANES],
+            diff: [0.0; LANES],
             de: [0.0; LANES],
             de_lag: [0.0; LANES],
             mu_max: [0.0; LANES],
@@ -1372,6 +1383,7 @@ fn particle_rates<const D: usize, K: Kernel, const ART: bool, const CN: bool>(
     } else {
         (lane_sum(&sums.drho) + cuts.drho, grad_v)
     };
+    let drho = drho + model.density_diffusion * (lane_sum(&sums.diff) + cuts.diff);
     *contact_force = fc;
     *out = ParticleRates {
         acc: acc + fc / mi + model.gravity,
@@ -1453,6 +1465,7 @@ fn conserve_chunk<const D: usize, K: Kernel, const ART: bool, const CN: bool>(
         if !CN {
             s.drho[l] += mj * dot(&wij, &grad);
         }
+        s.diff[l] += diffusion_term(hij, 0.5 * (gi.c + gj.c), gj.rho - gi.rho, gf, gj.vol);
         for a in 0..D {
             let va = wij[a] * gj.vol;
             for b in 0..D {
@@ -1603,6 +1616,8 @@ struct Cut<const D: usize> {
     de: f64,
     de_lag: f64,
     drho: f64,
+    /// The density diffusion's terms taken out (before δ).
+    diff: f64,
     grad_v: [[f64; D]; D],
 }
 
@@ -1613,6 +1628,7 @@ impl<const D: usize> Default for Cut<D> {
             de: 0.0,
             de_lag: 0.0,
             drho: 0.0,
+            diff: 0.0,
             grad_v: [[0.0; D]; D],
         }
     }
@@ -2121,6 +2137,8 @@ fn cut_pair<const D: usize, K: Kernel, const CN: bool>(
     if open {
         let (drho, grad_v) = kinematic_terms::<D, CN>((i, j), xij, gf, pass);
         cuts.drho -= drho;
+        let hij = 0.5 * (gi.h + gj.h);
+        cuts.diff -= diffusion_term(hij, 0.5 * (gi.c + gj.c), gj.rho - gi.rho, gf, gj.vol);
         for a in 0..D {
             for b in 0..D {
                 cuts.grad_v[a][b] -= grad_v[a][b];
@@ -2140,6 +2158,15 @@ fn within_support<const D: usize>(gi: &Gather<D>, gk: &Gather<D>) -> bool {
     }
     let support = gi.h + gk.h;
     r2 < support * support
+}
+
+/// The pair's term in i's density diffusion before δ (module doc): −2 h_ij c_ij (ρ_j − ρ_i)
+/// V_j gf, gf the kernel's gradient factor (∇_i W_ij = x_ij gf, gf ≤ 0), which is
+/// ψ_ij·∇_i W_ij V_j h_ij c_ij with Molteni & Colagrossi's ψ_ij = 2 (ρ_j − ρ_i) x_ji/|x_ji|².
+/// Symmetric in all but ρ_j − ρ_i, so that Σ_i V_i dρ_i/dt gains nothing from it.
+#[inline(always)]
+fn diffusion_term(hij: f64, cij: f64, drho_ji: f64, gf: f64, vol_j: f64) -> f64 {
+    -2.0 * hij * cij * drho_ji * gf * vol_j
 }
 
 /// The pair's terms in i's continuity and velocity gradient, as the pass adds them:
@@ -2930,6 +2957,54 @@ shape = { type = "rectangle", min = [0.0, 0.0], max = [8.0e-3, 6.0e-3] }
         );
         assert!(worst.0 < 1e-12, "CN-SPH's continuity: {}", worst.0);
         assert!(worst.1 > 0.02, "the mass-weighted sum: {}", worst.1);
+    }
+
+    /// The density diffusion (module doc) is a diffusion: on a block at rest whose density
+    /// alternates ±1 % from particle to particle like a checkerboard (every nearest neighbour
+    /// the other sign), each denser particle loses density and each lighter one gains it,
+    /// faces and corners included, while Σ V_i dρ_i/dt stays zero to round-off and δ = 0
+    /// leaves the continuity as it was (zero at rest); a uniform density gets none.
+    #[test]
+    fn density_diffusion_smooths_a_checkerboard_and_keeps_the_volume_weighted_sum() {
+        let (mut p, mut model) = elastic_block();
+        let rho0 = p.rho[0];
+        let sign = |x: &Vector<2>| {
+            let k = (x[0] / 1e-3).floor() as i64 + (x[1] / 1e-3).floor() as i64;
+            if k % 2 == 0 {
+                1.0
+            } else {
+                -1.0
+            }
+        };
+        for i in 0..p.n_real {
+            p.rho[i] = rho0 * (1.0 + 0.01 * sign(&p.x[i]));
+        }
+        let mut nl = NeighborList::default();
+        nl.build(&p.x, &p.h, p.n_real, 0.0);
+        let b = vec![Tensor::<2>::identity(); p.n_real];
+        let off = all_rates(&p, &nl, &model, &b);
+        assert!((0..p.n_real).all(|i| off.particles[i].drho == 0.0));
+        model.density_diffusion = 0.1;
+        let on = all_rates(&p, &nl, &model, &b);
+        let (mut sum, mut scale) = (0.0, 0.0);
+        for i in 0..p.n_real {
+            let d = on.particles[i].drho;
+            assert!(
+                d * sign(&p.x[i]) < 0.0,
+                "particle {i} at {:?}: dρ/dt {d}",
+                p.x[i]
+            );
+            let v = p.m[i] / p.rho[i];
+            sum += v * d;
+            scale += v * d.abs();
+        }
+        assert!(
+            sum.abs() < 1e-12 * scale,
+            "Σ V dρ/dt = {sum:e} of {scale:e}"
+        );
+        p.rho.iter_mut().for_each(|r| *r = rho0);
+        let uniform = all_rates(&p, &nl, &model, &b);
+        assert!((0..p.n_real).all(|i| uniform.particles[i].drho == 0.0));
     }
 
     /// CN-SPH's energy split (module doc): a particle's energy rate does not take its

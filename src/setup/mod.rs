@@ -129,6 +129,7 @@ pub fn build<const D: usize>(case: &Case) -> Result<(Particles<D>, Model<D>)> {
         h_min_ratio: s.h_min_ratio,
         h_max_ratio: s.h_max_ratio,
         smoothing_stretch: s.smoothing_stretch,
+        density_diffusion: s.density_diffusion,
         colour: None,
         formulation: s.formulation,
     };
