@@ -42,9 +42,11 @@ def pressure(rho, e):
     return cold + GAMMA0 * RHO0 * e
 
 
-def free_face(sigma_s, dx, strength=True, cfl=0.3):
+def free_face(sigma_s, dx, strength=True, cfl=0.3, tuler_butcher=None):
     """The target's free-face velocity history [(t, u)], and where its failed cells started
-    (their centres' material coordinate x0 from the impact face)."""
+    (their centres' material coordinate x0 from the impact face). `tuler_butcher`:
+    (sigma_0, lambda, K_f) instead of the threshold sigma_s: a cell fails once the integral of
+    (sigma_xx - sigma_0)^lambda dt over the time sigma_xx > sigma_0 reaches K_f."""
     nf, nt = round(FLYER / dx), round(TARGET / dx)
     n = nf + nt
     x = np.arange(n + 1) * dx - FLYER
@@ -56,6 +58,7 @@ def free_face(sigma_s, dx, strength=True, cfl=0.3):
     node_mass[1:] += 0.5 * m
     rho, e, s = RHO0 * np.ones(n), np.zeros(n), np.zeros(n)
     failed = np.zeros(n, bool)
+    impulse = np.zeros(n)
     g = G if strength else 0.0
     t, trace = 0.0, []
     while t < END:
@@ -76,7 +79,12 @@ def free_face(sigma_s, dx, strength=True, cfl=0.3):
         e = e + total * rate * dt / rho
         if strength:
             s = np.clip(s + 4.0 / 3.0 * G * rate * dt, -2.0 / 3.0 * Y0, 2.0 / 3.0 * Y0)
-        failed |= (-pressure(rho, e) + s) > sigma_s
+        if tuler_butcher is None:
+            failed |= (-pressure(rho, e) + s) > sigma_s
+        else:
+            s0, lam, k_f = tuler_butcher
+            impulse += np.maximum(-pressure(rho, e) + s - s0, 0.0) ** lam * dt
+            failed |= impulse >= k_f
         t += dt
         trace.append((t, u[-1]))
     x0 = (np.arange(n) + 0.5) * dx - FLYER
@@ -114,16 +122,32 @@ def main():
         "--strengths-gpa", default=None, help="spall strengths (0.6,1.0,1.5; --nylon: 0.23)"
     )
     ap.add_argument("--nylon", action="store_true", help="the library's nylon 6/6 (see above)")
+    ap.add_argument(
+        "--tuler-butcher",
+        default=None,
+        help="sigma_0 (GPa), lambda, K_f (Pa^lambda s) instead of a spall strength, e.g. 0.7,2,1e9",
+    )
+    ap.add_argument("--speed", type=float, default=None, help="the flyer's speed (m/s; 400)")
+    ap.add_argument("--flyer-mm", type=float, default=None, help="the flyer's thickness (0.5)")
     a = ap.parse_args()
+    if a.speed is not None:
+        globals()["V0"] = a.speed
+    if a.flyer_mm is not None:
+        globals()["FLYER"] = a.flyer_mm * 1e-3
     if a.nylon:
         globals().update(NYLON)
         a.hydro = True
     if a.strengths_gpa is None:
         a.strengths_gpa = "0.23" if a.nylon else "0.6,1.0,1.5"
     c_l = np.sqrt(C0**2 + (0.0 if a.hydro else 4.0 / 3.0 * G / RHO0))
+    tb = None
+    if a.tuler_butcher is not None:
+        s0, lam, k_f = (float(v) for v in a.tuler_butcher.split(","))
+        tb = (s0 * 1e9, lam, k_f)
+        a.strengths_gpa = a.tuler_butcher.split(",")[0]
     for sigma in (float(v) * 1e9 for v in a.strengths_gpa.split(",")):
         for dx in (float(v) * 1e-6 for v in a.cells_um.split(",")):
-            trace, failed_x0 = free_face(sigma, dx, strength=not a.hydro)
+            trace, failed_x0 = free_face(sigma, dx, strength=not a.hydro, tuler_butcher=tb)
             u_max, u_min = pull_back(trace)
             if a.nylon:
                 u_max, u_min = V0, lowest_after_rise(trace)

@@ -132,11 +132,13 @@ pub struct MaterialSpec {
 pub struct DamageSpec {
     pub spall: Option<crate::material::Spall>,
     pub johnson_cook: Option<crate::material::JohnsonCookFailure>,
+    /// Tuler–Butcher's rate-dependent spall (a deck names it instead of `spall`).
+    pub tuler_butcher: Option<crate::material::TulerButcher>,
 }
 
 impl DamageSpec {
     pub fn is_none(&self) -> bool {
-        self.spall.is_none() && self.johnson_cook.is_none()
+        self.spall.is_none() && self.johnson_cook.is_none() && self.tuler_butcher.is_none()
     }
 }
 

@@ -503,3 +503,39 @@ fn density_diffusion_out_of_range() {
     let case = parse(&deck.replace("density_diffusion = 1.5\n", ""), "good.toml").unwrap();
     assert_eq!(case.simulation.density_diffusion, 0.0);
 }
+
+/// Tuler–Butcher's damage table: its exponent is checked and named with its line, its
+/// missing impulse asked for, and a good table read with λ's default of 2.
+#[test]
+fn tuler_butcher_damage_keys() {
+    let strength =
+        "strength = { type = \"von_mises\", shear_modulus = 28.6e9, yield_stress = 0.26e9 }";
+    let with = |damage: &str| edit(strength, &format!("{strength}\ndamage = {damage}"));
+    let (message, help) = deck_error(
+        &with("{ type = \"tuler_butcher\", threshold = 0.7e9, exponent = 0.5, impulse = 1e9 }"),
+        "materials.al.damage.exponent",
+        9,
+    );
+    assert!(message.contains("[1, 10]"), "{message}");
+    assert!(help.contains("e.g. 2"), "{help}");
+    let (message, _) = deck_error(
+        &with("{ type = \"tuler_butcher\", threshold = 0.7e9 }"),
+        "materials.al.damage.impulse",
+        9,
+    );
+    assert!(message.contains("missing `impulse`"), "{message}");
+    let case = parse(
+        &with("{ type = \"tuler_butcher\", threshold = 0.7e9, impulse = 1e9 }"),
+        "good.toml",
+    )
+    .unwrap();
+    assert_eq!(
+        case.materials[0].damage.tuler_butcher,
+        Some(strike::material::TulerButcher {
+            threshold: 0.7e9,
+            exponent: 2.0,
+            impulse: 1e9
+        })
+    );
+    assert_eq!(case.materials[0].damage.kind(), "tuler_butcher");
+}

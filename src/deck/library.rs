@@ -89,7 +89,7 @@ fn johnson_cook(
 fn spall(strength: f64) -> DamageSpec {
     DamageSpec {
         spall: Some(Spall { strength }),
-        johnson_cook: None,
+        ..DamageSpec::default()
     }
 }
 
@@ -103,6 +103,7 @@ fn spall_and_jc(strength: f64, d: [f64; 5]) -> DamageSpec {
             ("d4", d[3]),
             ("d5", d[4]),
         ])),
+        tuler_butcher: None,
     }
 }
 

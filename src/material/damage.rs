@@ -36,13 +36,21 @@
 //! the density ratchet up through every rebound, to 1.4 ρ0 and 65 GPa in fragments at rest,
 //! and the pairs' switching made energy: +10 % in `examples/ogive_plate.toml`, 0.67 % then.)
 //!
-//! Two models, each optional per material:
+//! Three models, each optional per material (the first two are alternatives):
 //! - [`Spall`]: deterministic activation at the spall strength σ_s, then crack growth at the
 //!   Grady–Kipp speed c_g = 0.4 c_L (Grady & Kipp 1980, Int. J. Rock Mech. 17, 147; as used in
 //!   SPH by Benz & Asphaug 1994, Icarus 107, 98, eq. 11): while the largest principal stress
 //!   of the particle exceeds σ_s, d(D^⅓)/dt = c_g/R_s with R_s half the particle's spacing. A
 //!   crack crosses a particle in R_s/c_g = 1.25 Δp/c_L, so the spall plane opens in a few
 //!   particle transit times and the tension it held falls to zero behind it.
+//! - [`TulerButcher`] (Tuler & Butcher 1968, Int. J. Fract. Mech. 4, 431): a spall strength
+//!   that depends on how fast the tension rises. D = (1/K_f) ∫ (σ1 − σ0)^λ dt over the time the
+//!   largest principal stress σ1 exceeds the threshold σ0; the particle fails at D = 1 and
+//!   keeps its whole strength until then (a fracture indicator, as LS-DYNA's
+//!   `*MAT_ADD_EROSION` uses the criterion). Under tension rising at σ̇ from σ0 it fails at
+//!   σ0 + ((λ + 1) σ̇ K_f)^(1/(λ+1)): the faster the load, the higher the stress it carries.
+//!   Unlike [`Spall`], whose crack crosses a particle in a time proportional to its spacing,
+//!   nothing in it depends on the lattice.
 //! - [`JohnsonCookFailure`] (Johnson & Cook 1985, Eng. Fract. Mech. 21, 31, eq. 1):
 //!   D += Δεp/ε_f, ε_f = (D1 + D2 exp(D3 σ*))(1 + D4 ln ε̇*)(1 + D5 T*), σ* = −p/σ_eq, ε̇*
 //!   taken as 1 below the reference rate.
@@ -133,6 +141,78 @@ impl Damage for Spall {
 
     fn degrades(&self) -> bool {
         true
+    }
+}
+
+/// Tuler–Butcher's cumulative stress criterion: see the module doc.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct TulerButcher {
+    /// σ0 (Pa): the tension below which nothing accumulates.
+    pub threshold: f64,
+    /// λ: the exponent of the excess stress (1: an impulse; 2: an energy).
+    pub exponent: f64,
+    /// K_f (Pa^λ s): the integral at which the particle fails.
+    pub impulse: f64,
+}
+
+impl Parameters for TulerButcher {
+    const NAME: &'static str = "tuler_butcher";
+    const PARAMS: &'static [Param] = &[
+        Param::required(
+            "threshold",
+            "the threshold stress σ0 in Pa, e.g. 0.7e9",
+            Valid::Positive,
+        ),
+        Param::optional(
+            "exponent",
+            "the exponent λ of the excess stress, e.g. 2",
+            Valid::Closed(1.0, 10.0),
+            2.0,
+        ),
+        Param::required(
+            "impulse",
+            "the damage integral K_f at failure in Pa^λ s, e.g. 1e9 for λ = 2",
+            Valid::Positive,
+        ),
+    ];
+
+    fn from_values(v: &[f64]) -> Result<Self, ParamError> {
+        Ok(TulerButcher {
+            threshold: v[0],
+            exponent: v[1],
+            impulse: v[2],
+        })
+    }
+
+    fn values(&self) -> Vec<f64> {
+        vec![self.threshold, self.exponent, self.impulse]
+    }
+}
+
+impl TulerButcher {
+    /// The stress at which a particle fails under tension rising at `rate` (Pa/s) from σ0:
+    /// σ0 + ((λ + 1) σ̇ K_f)^(1/(λ+1)), from ∫0^t (σ̇ s)^λ ds = K_f.
+    pub fn failure_stress_at_rate(&self, rate: f64) -> f64 {
+        let l1 = self.exponent + 1.0;
+        self.threshold + (l1 * rate * self.impulse).powf(1.0 / l1)
+    }
+}
+
+impl Damage for TulerButcher {
+    fn grow(&self, st: &DamageState, d: f64, dt: f64) -> f64 {
+        if st.sigma_1 <= self.threshold || d >= 1.0 {
+            return d;
+        }
+        let excess = st.sigma_1 - self.threshold;
+        (d + excess.powf(self.exponent) * dt / self.impulse).min(1.0)
+    }
+
+    fn idle(&self, sigma_1_bound: f64, _d_eps_p: f64) -> bool {
+        sigma_1_bound <= self.threshold
+    }
+
+    fn degrades(&self) -> bool {
+        false
     }
 }
 
@@ -324,7 +404,8 @@ mod tests {
     fn idle_models_grow_nothing() {
         let spall = Spall { strength: 1e9 };
         let jc = JohnsonCookFailure::from_pairs(&[("d1", 0.05), ("d2", 3.44), ("d3", -2.12)]);
-        let models: [&dyn Damage; 2] = [&spall, &jc];
+        let tb = TulerButcher::from_pairs(&[("threshold", 1e9), ("impulse", 1e9)]);
+        let models: [&dyn Damage; 3] = [&spall, &jc, &tb];
         for bound in [-2e9, 0.5e9, 1e9, 1.5e9] {
             for d_eps_p in [0.0, 0.01] {
                 for model in models {
@@ -351,6 +432,41 @@ mod tests {
         };
         assert!(jc.grow(&st, 0.2, 1e-6) > 0.2);
         assert!(spall.grow(&state(1.01e9), 0.2, 1e-6) > 0.2);
+        assert!(tb.grow(&state(1.01e9), 0.2, 1e-6) > 0.2);
+    }
+
+    /// Under a constant excess stress the integral reaches K_f at K_f/(σ − σ0)^λ; under tension
+    /// rising at σ̇ it fails at σ0 + ((λ + 1) σ̇ K_f)^(1/(λ+1)), whatever the step (to the
+    /// quadrature's first order), and eight times the rate doubles the excess for λ = 2.
+    #[test]
+    fn tuler_butcher_fails_at_its_rate_dependent_stress() {
+        let tb = TulerButcher::from_pairs(&[("threshold", 0.7e9), ("impulse", 1e9)]);
+        assert_eq!(tb.exponent, 2.0);
+        assert_eq!(tb.grow(&state(0.7e9), 0.0, 1e-6), 0.0);
+        // 0.3 GPa above σ0: K_f / (0.3e9)² = 11.1 ns.
+        let t_f = 1e9 / (0.3e9f64).powi(2);
+        let mut d = 0.0;
+        for _ in 0..10 {
+            d = tb.grow(&state(1.0e9), d, 0.1 * t_f);
+        }
+        assert_relative_eq!(d, 1.0, max_relative = 1e-12);
+        assert_eq!(tb.grow(&state(1.0e9), d, 1e-9), 1.0);
+        // Once grown it stays, also in compression.
+        assert_eq!(tb.grow(&state(-5e9), 0.3, 1e-6), 0.3);
+        for (rate, steps) in [(1e16, 4000), (8e16, 1000)] {
+            let expected = tb.failure_stress_at_rate(rate);
+            let dt = (expected - 0.7e9) / rate / steps as f64;
+            let (mut d, mut t) = (0.0, 0.0);
+            while d < 1.0 {
+                t += dt;
+                d = tb.grow(&state(0.7e9 + rate * t), d, dt);
+            }
+            assert_relative_eq!(0.7e9 + rate * t, expected, max_relative = 1e-3);
+        }
+        let excess = |rate| tb.failure_stress_at_rate(rate) - 0.7e9;
+        assert_relative_eq!(excess(8e16) / excess(1e16), 2.0, max_relative = 1e-12);
+        assert!(tb.idle(0.7e9, 1.0) && !tb.idle(0.71e9, 0.0));
+        assert!(!tb.degrades());
     }
 
     #[test]

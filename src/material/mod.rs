@@ -12,7 +12,7 @@ pub mod strength;
 pub mod tillotson;
 
 use crate::case::{EosSpec, MaterialSpec, StrengthSpec};
-pub use damage::{Damage, DamageState, Damaged, JohnsonCookFailure, Spall};
+pub use damage::{Damage, DamageState, Damaged, JohnsonCookFailure, Spall, TulerButcher};
 pub use eos::{Eos, LinearEos, MieGruneisen};
 pub use johnson_cook::JohnsonCook;
 use params::{Param, ParamError, Parameters};
@@ -92,6 +92,9 @@ impl Material {
         let mut damage: Vec<Box<dyn Damage>> = Vec::new();
         if let Some(s) = spec.damage.spall {
             damage.push(Box::new(s));
+        }
+        if let Some(t) = spec.damage.tuler_butcher {
+            damage.push(Box::new(t));
         }
         if let Some(f) = spec.damage.johnson_cook {
             damage.push(Box::new(f));
@@ -214,11 +217,12 @@ pub const EOS_MODELS: [(&str, &[Param]); 3] = [
     ("tillotson", Tillotson::PARAMS),
 ];
 
-/// The damage choices a deck can name: none, spall alone, or Johnson–Cook failure with an
-/// optional spall strength (0: none).
-pub const DAMAGE_MODELS: [(&str, &[Param]); 3] = [
+/// The damage choices a deck can name: none, spall alone, Tuler–Butcher's rate-dependent spall
+/// alone, or Johnson–Cook failure with an optional spall strength (0: none).
+pub const DAMAGE_MODELS: [(&str, &[Param]); 4] = [
     ("none", &[]),
     ("spall", Spall::PARAMS),
+    (TulerButcher::NAME, TulerButcher::PARAMS),
     ("johnson_cook", damage::JOHNSON_COOK_WITH_SPALL),
 ];
 
@@ -335,11 +339,15 @@ impl crate::case::DamageSpec {
         match (self.spall, self.johnson_cook) {
             (_, Some(_)) => "johnson_cook",
             (Some(_), None) => "spall",
+            (None, None) if self.tuler_butcher.is_some() => TulerButcher::NAME,
             (None, None) => "none",
         }
     }
 
     pub fn values(&self) -> Vec<f64> {
+        if let Some(t) = self.tuler_butcher {
+            return t.values();
+        }
         let spall = self.spall.map_or(0.0, |s| s.strength);
         match self.johnson_cook {
             Some(f) => {
@@ -357,13 +365,18 @@ impl crate::case::DamageSpec {
             "none" => Self::default(),
             "spall" => Self {
                 spall: Some(Spall { strength: v[0] }),
-                johnson_cook: None,
+                ..Self::default()
+            },
+            TulerButcher::NAME => Self {
+                tuler_butcher: Some(TulerButcher::from_values(v)?),
+                ..Self::default()
             },
             _ => {
                 let n = JohnsonCookFailure::PARAMS.len();
                 Self {
                     spall: (v[n] > 0.0).then_some(Spall { strength: v[n] }),
                     johnson_cook: Some(JohnsonCookFailure::from_values(&v[..n])?),
+                    tuler_butcher: None,
                 }
             }
         })
