@@ -20,6 +20,11 @@ S1 = 1.849, Gamma0 = 0.87, hydrodynamic, spall strength 0.23 GPa), followed to 1
 reference of tests/verification_materials.rs's nylon spall. Its pulse is square, not
 triangular, so the pull-back minimum is read as the lowest free-face velocity after the face
 first passes 350 m/s.
+
+With --tuler-butcher s0,lambda,K_f: Tuler & Butcher's criterion instead of the spall strength
+(a cell fails once the integral of (sigma_xx - s0)^lambda dt reaches K_f; s0 in GPa, K_f in
+Pa^lambda s), the reference of tests/verification_materials.rs's Tuler-Butcher flyer plate;
+--flyer-mm and --speed change the flyer.
 """
 import argparse
 

@@ -1008,3 +1008,51 @@ position = 0.2e-3
         }
     }
 }
+
+/// Tuler–Butcher's spall in a wave problem: `examples/spall.toml`'s flyer plate with
+/// `damage = { type = "tuler_butcher", threshold = 0.7e9, exponent = 2, impulse = 1e9 }`, and
+/// the same with a flyer twice as thick (1 mm: a longer pulse, whose tension rises more
+/// slowly), against the independent 1D Lagrangian solution of each
+/// (`examples/spall_lagrangian_1d.py --tuler-butcher 0.7,2,1e9 [--flyer-mm 1.0]`, 1 µm cells:
+/// pull-back minimum 265.7 / 288.4 m/s, spall plane 2.5143 / 1.9863 mm): at Δp = 20 / 10 µm
+/// the minimum within 10 / 6 % and the plane within 6 / 4 %, each closer at the finer spacing.
+/// Measured 2026-12-04: thin 244.1 / 255.0 m/s (−8.1 / −4.0 %), plane 2.430 / 2.470 mm (−3.4 /
+/// −1.8 %); thick 293.4 / 288.8 m/s (+1.7 / +0.1 %), plane 2.089 / 2.055 mm (+5.2 / +3.5 %).
+/// Failure at the threshold alone (0.7 GPa) reads 316.6 m/s for the thin flyer in the 1D code
+/// (5 µm cells), +19 %: the test sees a criterion without its integral.
+#[test]
+fn tuler_butcher_flyer_plate_spalls_as_the_independent_solution_does() {
+    let deck = spall_text().replace(
+        "damage = { type = \"spall\", spall_strength = 1.0e9 }",
+        "damage = { type = \"tuler_butcher\", threshold = 0.7e9, exponent = 2.0, impulse = 1.0e9 }",
+    );
+    let thick = deck.replace("min = [-0.5e-3, 0.0]", "min = [-1.0e-3, 0.0]");
+    assert!(
+        deck.contains("tuler_butcher") && thick != deck,
+        "the deck moved"
+    );
+    for (deck, u_min_ref, plane_ref) in
+        [(deck.clone(), 265.7, 2.5143e-3), (thick, 288.4, 1.9863e-3)]
+    {
+        let mut errors = Vec::new();
+        for (refine, u_tol, plane_tol) in [(1.0, 0.10, 0.06), (0.5, 0.06, 0.04)] {
+            let (_, u_min, _, plane, run) =
+                read_spall(&spall_case(&deck, refine), 0.7e9, plane_ref);
+            assert!(!run.failed_x0.is_empty(), "nothing failed");
+            let (eu, ep) = (u_min / u_min_ref - 1.0, plane / plane_ref - 1.0);
+            assert!(
+                eu.abs() < u_tol,
+                "pull-back minimum {u_min} against {u_min_ref}"
+            );
+            assert!(
+                ep.abs() < plane_tol,
+                "spall plane {plane} against {plane_ref}"
+            );
+            errors.push((eu.abs(), ep.abs()));
+        }
+        assert!(
+            errors[1].0 < errors[0].0 && errors[1].1 < errors[0].1,
+            "not closer at the finer spacing: {errors:?}"
+        );
+    }
+}
