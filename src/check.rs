@@ -130,6 +130,23 @@ fn plan_lines(case: &Case, n: f64, dt: f64, w: &mut String, warnings: &mut Vec<S
         "first time step: {dt:.4e} s  → about {steps:.0} steps to {:.4e} s (contact may shorten it)",
         case.simulation.end_time
     );
+    for (plane, spec) in planes.iter().zip(&case.symmetry) {
+        let walled: Vec<&str> = (0..case.bodies.len())
+            .filter(|&b| !spec.wall && plane.wall.is_some_and(|x| x.walls(b as u32)))
+            .map(|b| case.bodies[b].name.as_str())
+            .collect();
+        if !walled.is_empty() {
+            let _ = writeln!(
+                w,
+                "symmetry plane {} = {}: '{}' {} across it and {} it as a frictionless wall (a twin impact: the mirror image parts where it would pull)",
+                ["x", "y", "z"][plane.axis],
+                plane.position,
+                walled.join("', '"),
+                if walled.len() == 1 { "moves" } else { "move" },
+                if walled.len() == 1 { "meets" } else { "meet" }
+            );
+        }
+    }
     let _ = write!(w, "estimated memory: {}", human_bytes(bytes));
     if case.may_fail() {
         // The crack lists (`physics::CrackLists`: the index of each failed neighbour, each

@@ -393,8 +393,8 @@ fn steinberg_guinan_flows_at_its_shocked_state() {
 /// steel bar against the finite-element results at R0/Δp = 8 and 16; the steel and copper bars
 /// in CN-SPH on their `[[wall]]`, against their twin through the contact and on a fixed wall
 /// through the contact, agreeing within 2 % in final length and face diameter at R0/Δp = 16,
-/// the faces' disagreement not growing with refinement (reported at 8; the symmetry plane
-/// reported beside them); the copper bar on its wall in conventional SPH within 4 % (length)
+/// the faces' disagreement not growing with refinement (reported at 8; on a symmetry plane,
+/// which meets the rod moving into it as the wall, the same to the bit); the copper bar on its wall in conventional SPH within 4 % (length)
 /// and 5 % (face) of the published results at R0/Δp = 16. By hand on 2026-12-03 with the face
 /// measure's foot level, the CN faces through the contact at 16 read −0.13 % (copper twin,
 /// with the contact's tie at touching broken), −0.79 % (copper fixed block) and −0.79 % (steel

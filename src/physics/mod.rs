@@ -2875,7 +2875,7 @@ shape = { type = "rectangle", min = [0.0, 0.0], max = [8.0e-3, 6.0e-3] }
             axis: 1,
             position: 0.0,
             side: 1.0,
-            wall: Some(1),
+            wall: Some(crate::boundary::Walled::all(1)),
         }];
         let g = Tensor::<2>::new(30.0, 0.0, 0.0, 20.0);
         let face: Vec<usize> = (0..p.n_real).filter(|&i| p.x[i][1] < 1e-3).collect();

@@ -3,7 +3,7 @@
 pub mod mesh;
 pub mod shapes;
 
-use crate::boundary::Plane;
+use crate::boundary::{Plane, Walled};
 use crate::case::{
     BodySpec, Case, ContactLaw, EosSpec, InteractionKind, KernelKind, Motion, SymmetryPlane,
 };
@@ -97,7 +97,7 @@ pub fn build<const D: usize>(case: &Case) -> Result<(Particles<D>, Model<D>)> {
     // With a wall, body N + b is b's mirror image (see `boundary`), of b's material (images
     // are ghosts: never integrated).
     let n = case.bodies.len();
-    let images = if case.symmetry.iter().any(|s| s.wall) {
+    let images = if planes.iter().any(|p| p.wall.is_some()) {
         2
     } else {
         1
@@ -174,24 +174,73 @@ pub fn planes_of(bodies: &[BodySpec], symmetry: &[SymmetryPlane]) -> Vec<Plane> 
             } else {
                 -1.0
             };
+            let n = bodies.len() as u32;
+            let wall = if s.wall {
+                Some(Walled::all(n))
+            } else {
+                // The bodies that move across the plane's normal meet it as a wall.
+                let mask = (0..bodies.len().min(64))
+                    .filter(|&b| crosses(&bodies[b], s.axis))
+                    .fold(0u64, |m, b| m | 1 << b);
+                (mask != 0).then_some(Walled { bodies: n, mask })
+            };
             Plane {
                 axis: s.axis,
                 position: s.position,
                 side,
-                wall: s.wall.then_some(bodies.len() as u32),
+                wall,
             }
         })
         .collect()
 }
 
-/// Every body lies on its walls' side: a symmetry plane may cut a body (the model keeps one
-/// side), a wall may not (the part beyond it would silently be lost).
+/// Whether `body` moves across a plane normal to `axis`: its initial velocity has a component
+/// along it (beyond round-off of its speed). Such a body meets a symmetry plane as a wall (see
+/// `boundary`).
+fn crosses(body: &BodySpec, axis: usize) -> bool {
+    let speed = body.velocity.iter().map(|v| v * v).sum::<f64>().sqrt();
+    body.velocity[axis].abs() > 1e-12 * speed
+}
+
+/// Every body lies on its walls' side: a symmetry plane may cut a body at rest across it (the
+/// model keeps one side), a wall may not (the part beyond it would silently be lost), nor may
+/// a symmetry plane cut a body that moves across it (no symmetry of the problem: its mirror
+/// half would move the other way through the same material).
 fn check_walls(case: &Case, planes: &[Plane]) -> Result<()> {
-    for plane in planes.iter().filter(|p| p.wall.is_some()) {
+    for (plane, spec) in planes.iter().zip(&case.symmetry) {
         for (b, body) in case.bodies.iter().enumerate() {
+            let walled = plane.wall.is_some_and(|w| w.walls(b as u32));
+            if !walled {
+                if b >= 64 && crosses(body, plane.axis) {
+                    return Err(deck_error(
+                        case,
+                        body.location,
+                        &format!("body[{b}].velocity"),
+                        format!(
+                            "body '{}' moves across the symmetry plane {} = {}, and a symmetry plane meets at most the first 64 bodies as a wall",
+                            body.name, ["x", "y", "z"][plane.axis], plane.position
+                        ),
+                        "list the bodies that move across the plane first, or use a [[wall]]",
+                    ));
+                }
+                continue;
+            }
             let (lo, hi) = shapes::bounding_box(&body.shape);
             let k = plane.axis;
             let beyond = -plane.depth(lo[k]).min(plane.depth(hi[k]));
+            if beyond > 1e-6 * body.spacing && !spec.wall {
+                let axis = ["x", "y", "z"][k];
+                return Err(deck_error(
+                    case,
+                    body.location,
+                    &format!("body[{b}].velocity"),
+                    format!(
+                        "body '{}' is cut by the symmetry plane {axis} = {} and moves across it ({} m/s along {axis}): the plane is no symmetry of the problem",
+                        body.name, plane.position, body.velocity[k]
+                    ),
+                    "a body cut by a symmetry plane moves along it; a body that meets its mirror image lies on one side of the plane",
+                ));
+            }
             if beyond > 1e-6 * body.spacing {
                 let axis = ["x", "y", "z"][k];
                 return Err(deck_error(
@@ -430,5 +479,60 @@ axis = "y"
         );
         let cut = through.replace("[[wall]]", "[[symmetry]]");
         assert!(build::<2>(&crate::deck::parse(&cut, "c.toml").unwrap()).is_ok());
+    }
+
+    /// A body that moves across a symmetry plane meets it as a wall (its ghosts there are its
+    /// wall images), one at rest across it keeps the plane's ghosts, and a body cut by the plane
+    /// that moves across it is a deck error that names it.
+    #[test]
+    fn bodies_moving_into_a_symmetry_plane_meet_it_as_a_wall() {
+        let deck = r#"
+[simulation]
+dimension = 2
+end_time = 1.0e-6
+[materials.al]
+library = "al_6061_t6"
+[[body]]
+name = "a"
+material = "al"
+spacing = 1.0e-3
+velocity = [50.0, -100.0]
+shape = { type = "rectangle", min = [0.0, 0.0], max = [0.01, 0.01] }
+[[body]]
+name = "b"
+material = "al"
+spacing = 1.0e-3
+velocity = [50.0, 0.0]
+shape = { type = "rectangle", min = [0.02, -0.01], max = [0.03, 0.01] }
+[[symmetry]]
+axis = "y"
+"#;
+        let case = crate::deck::parse(deck, "s.toml").unwrap();
+        let planes = symmetry_planes(&case);
+        let walled = planes[0].wall.expect("body a moves into the plane");
+        assert!(walled.walls(0) && !walled.walls(1));
+        let (mut p, model) = build::<2>(&case).unwrap();
+        crate::boundary::rebuild_ghosts(&mut p, &planes);
+        assert_eq!(model.pairs.bodies(), 4);
+        assert_eq!(*model.pairs.rule(0, 2), PairRule::Wall);
+        // a's ghosts are its images (body 2), b's (cut by the plane, at rest across it) its own.
+        let ghosts = |b: u32| (p.n_real..p.len()).filter(|&i| p.body[i] == b).count();
+        assert!(ghosts(2) > 0 && ghosts(1) > 0 && ghosts(0) == 0 && ghosts(3) == 0);
+        // Moving along the plane: no wall, no images.
+        let along = deck.replace("[50.0, -100.0]", "[50.0, 0.0]");
+        let case = crate::deck::parse(&along, "s.toml").unwrap();
+        assert_eq!(symmetry_planes(&case)[0].wall, None);
+        assert_eq!(build::<2>(&case).unwrap().1.pairs.bodies(), 2);
+        // b, cut by the plane, moving across it.
+        let across = deck.replace("velocity = [50.0, 0.0]", "velocity = [50.0, 1.0]");
+        let case = crate::deck::parse(&across, "s.toml").unwrap();
+        let Err(Error::Deck { key, message, .. }) = build::<2>(&case) else {
+            panic!("a body moving across the plane that cuts it was accepted");
+        };
+        assert_eq!(key, "body[1].velocity", "{message}");
+        assert!(
+            message.contains("'b'") && message.contains("no symmetry"),
+            "{message}"
+        );
     }
 }
