@@ -224,3 +224,74 @@ fn a_wall_beside_symmetry_planes_matches_the_whole_model() {
         "nothing lifted off: the test does not see the release"
     );
 }
+
+/// Hertz's twin spheres on a symmetry plane: one sphere of `examples/hertz_spheres.toml`
+/// (aluminium, R = 10 mm, 50 m/s) coming down on the plane z = 0 between the two (quarter
+/// model) is the twin impact, which the plane meets as a frictionless wall since 2026-12-04:
+/// the sphere leaves at 95 % of its speed or more (on the bonded plane of before, which pulled
+/// on the patch as it parted, at 88 %: 0.1251 of 0.1422 kg m/s at R/Δp = 16, measured with the
+/// build before), and the force the plane exerts (the rate of the sphere's momentum) comes
+/// closer to Hertz's for two equal spheres at 100 m/s (peak 85.96 kN, contact 24.20 µs) from
+/// R/Δp = 16 to 20. It is not within Hertz's 10 % yet (measured 2026-12-04: peak +15.9 /
+/// +13.6 %, contact −21.4 / −19.3 %, leaving at 48.55 / 48.97 m/s; README, Not yet): a wall's
+/// image meets a particle through the conservation equations whenever the pair closes within
+/// the kernel's support, so the sphere's surface particles up to 2h above the plane are
+/// pushed through the viscosity before they touch it: 14.9 kN at 0.92 µs against Hertz's
+/// 3.2 kN. A flat face, which starts touching, does not see it.
+#[test]
+fn a_sphere_rebounds_off_a_symmetry_plane_as_off_its_twin() {
+    let path = Path::new(env!("CARGO_MANIFEST_DIR")).join("examples/hertz_spheres.toml");
+    let base = deck::load(&path).unwrap();
+    let (f_hertz, t_hertz) = (85.9556e3, 24.2019e-6);
+    let mut previous = f64::INFINITY;
+    for ratio in [16.0, 20.0] {
+        let mut case = base.clone();
+        case.bodies.remove(0);
+        case.interactions.clear();
+        case.bodies[0].spacing = 0.01 / ratio;
+        case.simulation.end_time = 1.12 * t_hertz;
+        case.symmetry.push(strike::case::SymmetryPlane {
+            axis: 2,
+            position: 0.0,
+            wall: false,
+        });
+        let mut sim = Simulation::<3>::new(&case).unwrap();
+        let mass: f64 = (0..sim.particles.n_real).map(|i| sim.particles.m[i]).sum();
+        let v0 = case.bodies[0].velocity[2];
+        let end = case.simulation.end_time;
+        let (mut last, mut force) = ((0.0, mass * v0), Vec::new());
+        while sim.state.time < end * (1.0 - 1e-12) {
+            sim.step(end - sim.state.time).unwrap();
+            let p = &sim.particles;
+            let pz: f64 = (0..p.n_real).map(|i| p.m[i] * p.v[i][2]).sum();
+            let t = sim.state.time;
+            force.push((t, 4.0 * (pz - last.1) / (t - last.0)));
+            last = (t, pz);
+        }
+        let f_max = force.iter().map(|f| f.1).fold(0.0, f64::max);
+        let on: Vec<f64> = force
+            .iter()
+            .filter(|f| f.1 > 0.01 * f_max)
+            .map(|f| f.0)
+            .collect();
+        assert!(!on.is_empty(), "R/Δp = {ratio}: the plane never pushed");
+        let t_c = on[on.len() - 1] - on[0];
+        let v_end = last.1 / mass;
+        let error = (f_max / f_hertz - 1.0)
+            .abs()
+            .max((t_c / t_hertz - 1.0).abs());
+        eprintln!(
+            "R/Δp = {ratio}: peak {:.2} kN ({:+.2} %), contact {:.2} µs ({:+.2} %), leaves at {v_end:.3} m/s",
+            f_max / 1e3,
+            100.0 * (f_max / f_hertz - 1.0),
+            t_c * 1e6,
+            100.0 * (t_c / t_hertz - 1.0)
+        );
+        assert!(v_end >= -0.95 * v0, "the sphere left at {v_end} m/s");
+        assert!(
+            error < previous,
+            "Hertz's error grew: {error} after {previous}"
+        );
+        previous = error;
+    }
+}
