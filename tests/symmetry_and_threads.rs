@@ -295,3 +295,42 @@ fn a_sphere_rebounds_off_a_symmetry_plane_as_off_its_twin() {
         previous = error;
     }
 }
+
+/// Pressed, a `[[wall]]` and a bonded symmetry plane are the same boundary, to the bit: the left
+/// bar of `examples/bars_contact.toml` at rest (so that the plane x = 0 at its end is bonded
+/// to it), pushed into the plane by a body force of 1e6 m/s² along +x from the first step,
+/// runs the same on the wall as on the plane for 10 µs, in both formulations.
+#[test]
+fn a_wall_pressed_is_the_bonded_symmetry_plane() {
+    let path = Path::new(env!("CARGO_MANIFEST_DIR")).join("examples/bars_contact.toml");
+    for f in [Formulation::Conventional, Formulation::Corrected] {
+        let mut wall = deck::load(&path).unwrap();
+        wall.simulation.formulation = f;
+        wall.bodies.truncate(1);
+        wall.bodies[0].velocity = [0.0; 3];
+        wall.interactions.clear();
+        wall.simulation.gravity = [1e6, 0.0, 0.0];
+        wall.simulation.end_time = 10e-6;
+        wall.symmetry.push(strike::case::SymmetryPlane {
+            axis: 0,
+            position: 0.0,
+            wall: true,
+        });
+        let mut plane = wall.clone();
+        plane.symmetry.last_mut().unwrap().wall = false;
+        assert_eq!(
+            strike::setup::symmetry_planes(&plane).last().unwrap().wall,
+            None,
+            "the plane is bonded to a bar at rest"
+        );
+        let (w, p) = (body0_velocity(&wall), body0_velocity(&plane));
+        assert!(
+            w.len() > 100 && w[w.len() - 1].1 > 0.0,
+            "{f:?}: not pressed"
+        );
+        assert_eq!(
+            w, p,
+            "{f:?}: the wall is not the bonded plane while pressed"
+        );
+    }
+}
