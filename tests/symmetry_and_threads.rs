@@ -144,6 +144,25 @@ fn body0_velocity(case: &Case) -> Vec<(f64, f64)> {
     v
 }
 
+/// The left bar of `examples/bars_contact.toml` alone in formulation `f`, changed by `edit`,
+/// with a `[[wall]]` at its end x = 0, and the same with a `[[symmetry]]` plane there.
+fn left_bar_at_its_end(f: Formulation, edit: impl Fn(&mut Case)) -> (Case, Case) {
+    let path = Path::new(env!("CARGO_MANIFEST_DIR")).join("examples/bars_contact.toml");
+    let mut wall = deck::load(&path).unwrap();
+    wall.simulation.formulation = f;
+    wall.bodies.truncate(1);
+    wall.interactions.clear();
+    edit(&mut wall);
+    wall.symmetry.push(strike::case::SymmetryPlane {
+        axis: 0,
+        position: 0.0,
+        wall: true,
+    });
+    let mut plane = wall.clone();
+    plane.symmetry.last_mut().unwrap().wall = false;
+    (wall, plane)
+}
+
 /// A `[[wall]]` is a symmetry plane that only pushes, and a symmetry plane under a body that
 /// moves into it is that wall (a twin impact: the mirror image parts where it would pull). The
 /// elastic bars of `examples/bars_contact.toml` (±10 m/s, L/Δp = 100): the left bar alone on a
@@ -154,19 +173,8 @@ fn body0_velocity(case: &Case) -> Vec<(f64, f64)> {
 /// past +5 m/s. Both formulations.
 #[test]
 fn a_wall_is_a_symmetry_plane_that_lets_go() {
-    let path = Path::new(env!("CARGO_MANIFEST_DIR")).join("examples/bars_contact.toml");
     for f in [Formulation::Conventional, Formulation::Corrected] {
-        let mut wall = deck::load(&path).unwrap();
-        wall.simulation.formulation = f;
-        wall.bodies.truncate(1);
-        wall.interactions.clear();
-        wall.symmetry.push(strike::case::SymmetryPlane {
-            axis: 0,
-            position: 0.0,
-            wall: true,
-        });
-        let mut plane = wall.clone();
-        plane.symmetry.last_mut().unwrap().wall = false;
+        let (wall, plane) = left_bar_at_its_end(f, |_| {});
         let (w, p) = (body0_velocity(&wall), body0_velocity(&plane));
         assert_eq!(w, p, "{f:?}: the symmetry plane is not the wall");
         let end = w[w.len() - 1].1;
@@ -302,22 +310,12 @@ fn a_sphere_rebounds_off_a_symmetry_plane_as_off_its_twin() {
 /// runs the same on the wall as on the plane for 10 µs, in both formulations.
 #[test]
 fn a_wall_pressed_is_the_bonded_symmetry_plane() {
-    let path = Path::new(env!("CARGO_MANIFEST_DIR")).join("examples/bars_contact.toml");
     for f in [Formulation::Conventional, Formulation::Corrected] {
-        let mut wall = deck::load(&path).unwrap();
-        wall.simulation.formulation = f;
-        wall.bodies.truncate(1);
-        wall.bodies[0].velocity = [0.0; 3];
-        wall.interactions.clear();
-        wall.simulation.gravity = [1e6, 0.0, 0.0];
-        wall.simulation.end_time = 10e-6;
-        wall.symmetry.push(strike::case::SymmetryPlane {
-            axis: 0,
-            position: 0.0,
-            wall: true,
+        let (wall, plane) = left_bar_at_its_end(f, |c| {
+            c.bodies[0].velocity = [0.0; 3];
+            c.simulation.gravity = [1e6, 0.0, 0.0];
+            c.simulation.end_time = 10e-6;
         });
-        let mut plane = wall.clone();
-        plane.symmetry.last_mut().unwrap().wall = false;
         assert_eq!(
             strike::setup::symmetry_planes(&plane).last().unwrap().wall,
             None,
