@@ -228,22 +228,12 @@ fn check_walls(case: &Case, planes: &[Plane]) -> Result<()> {
             let (lo, hi) = shapes::bounding_box(&body.shape);
             let k = plane.axis;
             let beyond = -plane.depth(lo[k]).min(plane.depth(hi[k]));
-            if beyond > 1e-6 * body.spacing && !spec.wall {
-                let axis = ["x", "y", "z"][k];
-                return Err(deck_error(
-                    case,
-                    body.location,
-                    &format!("body[{b}].velocity"),
-                    format!(
-                        "body '{}' is cut by the symmetry plane {axis} = {} and moves across it ({} m/s along {axis}): the plane is no symmetry of the problem",
-                        body.name, plane.position, body.velocity[k]
-                    ),
-                    "a body cut by a symmetry plane moves along it; a body that meets its mirror image lies on one side of the plane",
-                ));
+            if beyond <= 1e-6 * body.spacing {
+                continue;
             }
-            if beyond > 1e-6 * body.spacing {
-                let axis = ["x", "y", "z"][k];
-                return Err(deck_error(
+            let axis = ["x", "y", "z"][k];
+            return Err(if spec.wall {
+                deck_error(
                     case,
                     body.location,
                     &format!("body[{b}].shape"),
@@ -252,8 +242,19 @@ fn check_walls(case: &Case, planes: &[Plane]) -> Result<()> {
                         body.name, plane.position
                     ),
                     "move the body to the wall's side, or the wall; a symmetry plane, not a wall, may cut a body",
-                ));
-            }
+                )
+            } else {
+                deck_error(
+                    case,
+                    body.location,
+                    &format!("body[{b}].velocity"),
+                    format!(
+                        "body '{}' is cut by the symmetry plane {axis} = {} and moves across it ({} m/s along {axis}): the plane is no symmetry of the problem",
+                        body.name, plane.position, body.velocity[k]
+                    ),
+                    "a body cut by a symmetry plane moves along it; a body that meets its mirror image lies on one side of the plane",
+                )
+            });
         }
     }
     Ok(())
