@@ -235,100 +235,135 @@ fn a_wall_beside_symmetry_planes_matches_the_whole_model() {
 
 /// Hertz's twin spheres on a symmetry plane: one sphere of `examples/hertz_spheres.toml`
 /// (aluminium, R = 10 mm, 50 m/s) coming down on the plane z = 0 between the two (quarter
-/// model) is the twin impact, which the plane meets as a frictionless wall since 2026-12-04:
-/// the sphere leaves at 95 % of its speed or more (on the bonded plane of before, which pulled
-/// on the patch as it parted, at 88 %: 0.1251 of 0.1422 kg m/s at R/Δp = 16, measured with the
-/// build before), and the force the plane exerts (the rate of the sphere's momentum) comes
-/// closer to Hertz's for two equal spheres at 100 m/s (peak 85.96 kN, contact 24.20 µs) from
-/// R/Δp = 16 to 20. It is not within Hertz's 10 % yet (measured 2026-12-04: peak +15.9 /
-/// +13.6 %, contact −21.4 / −19.3 %, leaving at 48.55 / 48.97 m/s; README, Not yet): a wall's
-/// image meets a particle through the conservation equations whenever the pair closes within
-/// the kernel's support, so the sphere's surface particles up to 2h above the plane are
-/// pushed through the viscosity before they touch it: 14.9 kN at 0.92 µs against Hertz's
-/// 3.2 kN. A flat face, which starts touching, does not see it.
+/// model) is the twin impact, which the plane meets as a frictionless wall: the force the plane
+/// exerts (the rate of the sphere's momentum) is Hertz's for two equal spheres at 100 m/s (peak
+/// 85.96 kN, contact 24.20 µs) within VALIDATION.md §D's 10 % at R/Δp = 20, the error smaller
+/// than at 16, and the sphere leaves at 95 % of its speed or more, in both formulations.
+/// Measured 2026-12-04 (peak force, contact time, at R/Δp = 16 / 20 / 30): conventional SPH
+/// +9.6 / +8.7 / +7.0 %, −10.0 / −9.0 / −8.4 %; CN-SPH +8.1 / +7.9 / +8.7 %, −8.5 / −8.1 /
+/// −8.9 % (at 30 CN-SPH's error is larger than at 20, by under a point: README, Not yet; 30
+/// takes minutes, and is not run here). The twins through the contact read within 1 % (peak)
+/// and 2 % (contact time) of these at R/Δp = 16. Before the wall met a particle only from
+/// touching (`boundary::wall_share`), it met the sphere as a flat punch: +15.9 / +13.6 % and
+/// −21.4 / −19.3 % at R/Δp = 16 / 20 (conventional), 14.9 kN at 0.92 µs against Hertz's 3.2;
+/// and before a plane under a moving body was a wall, the bonded plane pulled on the patch as
+/// it parted and the sphere left at 88 % of its speed.
 #[test]
 fn a_sphere_rebounds_off_a_symmetry_plane_as_off_its_twin() {
     let path = Path::new(env!("CARGO_MANIFEST_DIR")).join("examples/hertz_spheres.toml");
     let base = deck::load(&path).unwrap();
     let (f_hertz, t_hertz) = (85.9556e3, 24.2019e-6);
-    let mut previous = f64::INFINITY;
-    for ratio in [16.0, 20.0] {
-        let mut case = base.clone();
-        case.bodies.remove(0);
-        case.interactions.clear();
-        case.bodies[0].spacing = 0.01 / ratio;
-        case.simulation.end_time = 1.12 * t_hertz;
-        case.symmetry.push(strike::case::SymmetryPlane {
-            axis: 2,
-            position: 0.0,
-            wall: false,
-        });
-        let mut sim = Simulation::<3>::new(&case).unwrap();
-        let mass: f64 = (0..sim.particles.n_real).map(|i| sim.particles.m[i]).sum();
-        let v0 = case.bodies[0].velocity[2];
-        let end = case.simulation.end_time;
-        let (mut last, mut force) = ((0.0, mass * v0), Vec::new());
-        while sim.state.time < end * (1.0 - 1e-12) {
-            sim.step(end - sim.state.time).unwrap();
-            let p = &sim.particles;
-            let pz: f64 = (0..p.n_real).map(|i| p.m[i] * p.v[i][2]).sum();
-            let t = sim.state.time;
-            force.push((t, 4.0 * (pz - last.1) / (t - last.0)));
-            last = (t, pz);
+    for f in [Formulation::Conventional, Formulation::Corrected] {
+        let mut previous = f64::INFINITY;
+        for ratio in [16.0, 20.0] {
+            let mut case = base.clone();
+            case.simulation.formulation = f;
+            case.bodies.remove(0);
+            case.interactions.clear();
+            case.bodies[0].spacing = 0.01 / ratio;
+            case.simulation.end_time = 1.12 * t_hertz;
+            case.symmetry.push(strike::case::SymmetryPlane {
+                axis: 2,
+                position: 0.0,
+                wall: false,
+            });
+            let mut sim = Simulation::<3>::new(&case).unwrap();
+            let mass: f64 = (0..sim.particles.n_real).map(|i| sim.particles.m[i]).sum();
+            let v0 = case.bodies[0].velocity[2];
+            let end = case.simulation.end_time;
+            let (mut last, mut force) = ((0.0, mass * v0), Vec::new());
+            while sim.state.time < end * (1.0 - 1e-12) {
+                sim.step(end - sim.state.time).unwrap();
+                let p = &sim.particles;
+                let pz: f64 = (0..p.n_real).map(|i| p.m[i] * p.v[i][2]).sum();
+                let t = sim.state.time;
+                force.push((t, 4.0 * (pz - last.1) / (t - last.0)));
+                last = (t, pz);
+            }
+            let f_max = force.iter().map(|f| f.1).fold(0.0, f64::max);
+            let on: Vec<f64> = force
+                .iter()
+                .filter(|f| f.1 > 0.01 * f_max)
+                .map(|f| f.0)
+                .collect();
+            assert!(
+                !on.is_empty(),
+                "{f:?}, R/Δp = {ratio}: the plane never pushed"
+            );
+            let t_c = on[on.len() - 1] - on[0];
+            let v_end = last.1 / mass;
+            let (df, dt) = (f_max / f_hertz - 1.0, t_c / t_hertz - 1.0);
+            eprintln!(
+                "{f:?}, R/Δp = {ratio}: peak {:.2} kN ({:+.2} %), contact {:.2} µs ({:+.2} %), leaves at {v_end:.3} m/s",
+                f_max / 1e3,
+                100.0 * df,
+                t_c * 1e6,
+                100.0 * dt
+            );
+            let error = df.abs().max(dt.abs());
+            assert!(
+                ratio < 20.0 || error < 0.10,
+                "{f:?}, R/Δp = {ratio}: Hertz's error {error}"
+            );
+            assert!(v_end >= -0.95 * v0, "{f:?}: the sphere left at {v_end} m/s");
+            assert!(
+                error < previous,
+                "{f:?}: Hertz's error grew: {error} after {previous}"
+            );
+            previous = error;
         }
-        let f_max = force.iter().map(|f| f.1).fold(0.0, f64::max);
-        let on: Vec<f64> = force
-            .iter()
-            .filter(|f| f.1 > 0.01 * f_max)
-            .map(|f| f.0)
-            .collect();
-        assert!(!on.is_empty(), "R/Δp = {ratio}: the plane never pushed");
-        let t_c = on[on.len() - 1] - on[0];
-        let v_end = last.1 / mass;
-        let error = (f_max / f_hertz - 1.0)
-            .abs()
-            .max((t_c / t_hertz - 1.0).abs());
-        eprintln!(
-            "R/Δp = {ratio}: peak {:.2} kN ({:+.2} %), contact {:.2} µs ({:+.2} %), leaves at {v_end:.3} m/s",
-            f_max / 1e3,
-            100.0 * (f_max / f_hertz - 1.0),
-            t_c * 1e6,
-            100.0 * (t_c / t_hertz - 1.0)
-        );
-        assert!(v_end >= -0.95 * v0, "the sphere left at {v_end} m/s");
-        assert!(
-            error < previous,
-            "Hertz's error grew: {error} after {previous}"
-        );
-        previous = error;
     }
 }
 
-/// Pressed, a `[[wall]]` and a bonded symmetry plane are the same boundary, to the bit: the left
-/// bar of `examples/bars_contact.toml` at rest (so that the plane x = 0 at its end is bonded
-/// to it), pushed into the plane by a body force of 1e6 m/s² along +x from the first step,
-/// runs the same on the wall as on the plane for 10 µs, in both formulations.
+/// Pressed, a `[[wall]]` holds a face as a bonded symmetry plane does, but for the wall's onset
+/// (`boundary::wall_share`): the left bar of `examples/bars_contact.toml` at rest (so that the
+/// plane x = 0 at its end is bonded to it), pushed into the plane by a body force of 1e6 m/s²
+/// along +x from the first step, for 16 µs (the wave's round trip 2L/c). The plane holds the
+/// face from the first step; the wall meets it from touching, in full once the face has come
+/// 0.02 Δp closer, a compliance of the lattice's that the bar's own shortening under the load
+/// (about 0.1 Δp at L/Δp = 100) does not swamp. So the bar's mean velocity on the wall departs
+/// from the plane's by at most 20 % of the plane's largest, and by half as much at half the
+/// spacing. Measured 2026-12-04 (worst departure against the plane's largest, L/Δp = 100 /
+/// 200): conventional SPH 14.3 / 7.1 %, CN-SPH 13.4 / 6.7 %. (Before the onset, 2026-12-04, the
+/// two runs were the same to the bit.)
 #[test]
-fn a_wall_pressed_is_the_bonded_symmetry_plane() {
+fn a_wall_pressed_holds_as_the_bonded_symmetry_plane() {
     for f in [Formulation::Conventional, Formulation::Corrected] {
-        let (wall, plane) = left_bar_at_its_end(f, |c| {
-            c.bodies[0].velocity = [0.0; 3];
-            c.simulation.gravity = [1e6, 0.0, 0.0];
-            c.simulation.end_time = 10e-6;
-        });
-        assert_eq!(
-            strike::setup::symmetry_planes(&plane).last().unwrap().wall,
-            None,
-            "the plane is bonded to a bar at rest"
-        );
-        let (w, p) = (body0_velocity(&wall), body0_velocity(&plane));
+        let mut departures = Vec::new();
+        for dp in [0.5e-3, 0.25e-3] {
+            let (wall, plane) = left_bar_at_its_end(f, |c| {
+                c.bodies[0].spacing = dp;
+                c.bodies[0].velocity = [0.0; 3];
+                c.simulation.gravity = [1e6, 0.0, 0.0];
+                c.simulation.end_time = 16e-6;
+            });
+            assert_eq!(
+                strike::setup::symmetry_planes(&plane).last().unwrap().wall,
+                None,
+                "the plane is bonded to a bar at rest"
+            );
+            let (w, p) = (body0_velocity(&wall), body0_velocity(&plane));
+            assert!(w.len() > 100, "{f:?}: too few steps");
+            let largest = p.iter().map(|b| b.1.abs()).fold(0.0, f64::max);
+            let worst = w
+                .iter()
+                .zip(&p)
+                .map(|(a, b)| (a.1 - b.1).abs())
+                .fold(0.0, f64::max);
+            eprintln!(
+                "{f:?}, Δp = {dp:e} m: the plane's largest {largest:.4} m/s, the wall's worst departure {worst:.4} m/s ({:.1} %)",
+                100.0 * worst / largest
+            );
+            assert!(largest > 1.0, "{f:?}: the bar was not pressed");
+            departures.push(worst / largest);
+        }
         assert!(
-            w.len() > 100 && w[w.len() - 1].1 > 0.0,
-            "{f:?}: not pressed"
+            departures[0] < 0.2,
+            "{f:?}: the wall departs from the plane by {departures:?}"
         );
-        assert_eq!(
-            w, p,
-            "{f:?}: the wall is not the bonded plane while pressed"
+        assert!(
+            departures[1] < 0.6 * departures[0],
+            "{f:?}: the departure does not shrink with the spacing: {departures:?}"
         );
     }
 }

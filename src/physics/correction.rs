@@ -98,7 +98,7 @@ struct Points<'a, const D: usize> {
 }
 
 /// Which of a particle's neighbours its corrections count.
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+#[derive(Debug, Clone, Copy, PartialEq)]
 pub enum Counts {
     /// A neighbour of i's own body, of a body welded to it, or a wall's image pressed against
     /// it: in A_i, hence in B_i and in the surface indicator λ_min.
@@ -128,6 +128,9 @@ pub enum Counts {
     /// facing body in B its 7 km/s planar lattices mixed (0.72 Δp, 4 particles, closest 0.33
     /// Δp at Δp = 0.1 mm, against none and 0.80 Δp), so it keeps the paper's CN-SPH.
     Facing,
+    /// A wall's image coming into touch: as [`Counts::Body`], this share of it (the share the
+    /// rate pass counts, `boundary::wall_share`), so that B stays exact for a linear field.
+    Share(f64),
     /// Not counted.
     Not,
 }
@@ -350,23 +353,38 @@ fn moments<const D: usize, K: Kernel, const CHECK: bool>(
     // Entry j, in the support or not, to the queue of the sum that counts it (if any). The
     // queueing and the flush as closures, which the compiler keeps out of line: as methods
     // inlined into the walk the cubes ran 4 % slower, with the flush alone out of line 7 %.
-    let queue =
-        |queues: &mut [[u32; BATCH + LANES]; 2], queued: &mut [usize; 2], j: u32, inside: bool| {
-            if CHECK {
-                let c = if inside {
-                    counts(i, j as usize)
-                } else {
-                    Counts::Not
-                };
-                queues[0][queued[0]] = j;
-                queued[0] += (c == Counts::Body) as usize;
-                queues[1][queued[1]] = j;
-                queued[1] += (c == Counts::Facing) as usize;
+    let queue = |queues: &mut [[u32; BATCH + LANES]; 2],
+                 queued: &mut [usize; 2],
+                 sums: &mut [[[f64; LANES]; 6]; 2],
+                 j: u32,
+                 inside: bool| {
+        if CHECK {
+            let c = if inside {
+                counts(i, j as usize)
             } else {
-                queues[0][queued[0]] = j;
-                queued[0] += inside as usize;
+                Counts::Not
+            };
+            if let Counts::Share(share) = c {
+                // Rare (a face coming into touch with a wall): at once, in the first lane.
+                let (xij, r2, hj) = separations::<D, 1>(pi, &[j], points);
+                let r = r2[0].sqrt();
+                let gf = kernel.grad_factor::<D>(r, 0.5 * (pi.h + hj[0]));
+                let w = -share * points.vol[j as usize] * gf;
+                for (k, &(a, b)) in SYM.iter().enumerate() {
+                    if a < D && b < D {
+                        sums[0][k][0] += w * xij[a][0] * xij[b][0];
+                    }
+                }
             }
-        };
+            queues[0][queued[0]] = j;
+            queued[0] += (c == Counts::Body) as usize;
+            queues[1][queued[1]] = j;
+            queued[1] += (c == Counts::Facing) as usize;
+        } else {
+            queues[0][queued[0]] = j;
+            queued[0] += inside as usize;
+        }
+    };
     let flush = |queues: &mut [[u32; BATCH + LANES]; 2],
                  queued: &mut [usize; 2],
                  sums: &mut [[[f64; LANES]; 6]; 2]| {
@@ -392,7 +410,7 @@ fn moments<const D: usize, K: Kernel, const CHECK: bool>(
             let inside = in_support::<D, LANES>(pi, quad, points);
             for l in 0..LANES {
                 bits |= (inside[l] as u64) << (k + l);
-                queue(&mut queues, &mut queued, quad[l], inside[l]);
+                queue(&mut queues, &mut queued, &mut sums, quad[l], inside[l]);
             }
             k += LANES;
             flush(&mut queues, &mut queued, &mut sums);
@@ -400,7 +418,7 @@ fn moments<const D: usize, K: Kernel, const CHECK: bool>(
         for &j in quads.remainder() {
             let inside = in_support::<D, 1>(pi, &[j], points)[0];
             bits |= (inside as u64) << k;
-            queue(&mut queues, &mut queued, j, inside);
+            queue(&mut queues, &mut queued, &mut sums, j, inside);
             k += 1;
             flush(&mut queues, &mut queued, &mut sums);
         }

@@ -146,12 +146,22 @@ pub struct Model<const D: usize> {
     pub colour: Option<ColourLaw>,
     /// Conventional SPH, or CN-SPH's corrected gradients.
     pub formulation: Formulation,
+    /// The planes that meet some body as a rigid wall (their pairs' share:
+    /// [`crate::boundary::wall_share`]).
+    pub walls: Vec<crate::boundary::Plane>,
 }
 
 impl<const D: usize> Model<D> {
     pub fn material_of(&self, body: u32) -> &Material {
         &self.materials[self.body_material[body as usize]]
     }
+}
+
+/// The share of the pair of i and a wall's image j the pass counts
+/// ([`crate::boundary::wall_share`]).
+#[inline]
+fn wall_share<const D: usize>(model: &Model<D>, gi: &Gather<D>, gj: &Gather<D>) -> f64 {
+    crate::boundary::wall_share(&model.walls, gj.body, (&gi.x, gi.dp), (&gj.x, gj.dp))
 }
 
 /// How the bodies of a model meet, as the colour law asks.
@@ -239,10 +249,10 @@ pub fn corrections<const D: usize, K: Kernel>(
             PairRule::Wall => {
                 let (gi, gj) = (Gather::of(p, i, ratio), Gather::of(p, j, ratio));
                 let xij: [f64; D] = std::array::from_fn(|k| gi.x[k] - gj.x[k]);
-                if pressed(&gi, &gj, &xij) {
-                    Counts::Body
-                } else {
-                    Counts::Not
+                match pressed(&gi, &gj, &xij).then(|| wall_share(model, &gi, &gj)) {
+                    Some(1.0) => Counts::Body,
+                    Some(share) if share > 0.0 => Counts::Share(share),
+                    _ => Counts::Not,
                 }
             }
             // The colour law's traction stands in for the facing body's missing neighbours
@@ -1179,6 +1189,20 @@ fn particle_rates<const D: usize, K: Kernel, const ART: bool, const CN: bool, co
         };
     }
 
+    // Neighbour j (record gj) into the queue of pairs to cut, where it is one (`inside`).
+    macro_rules! cut_queue {
+        ($j:expr, $gj:expr, $inside:expr) => {
+            if pass.any_failed {
+                cut_queue[cut_queued] = $j;
+                cut_queued += ($inside & cuttable($gj)) as usize;
+                if cut_queued == BATCH {
+                    cut_before!($j + 1);
+                    cut_queued = 0;
+                }
+            }
+        };
+    }
+
     // CN-SPH: the correction pass has marked the list's entries in the support (a particle
     // with neighbours of its own body only): they are queued in list order, as the filter
     // below would queue them, with no test.
@@ -1193,14 +1217,7 @@ fn particle_rates<const D: usize, K: Kernel, const ART: bool, const CN: bool, co
             while bits != 0 {
                 let j = neighbors[64 * w + bits.trailing_zeros() as usize];
                 bits &= bits - 1;
-                if pass.any_failed {
-                    cut_queue[cut_queued] = j;
-                    cut_queued += cuttable(&gather[j as usize]) as usize;
-                    if cut_queued == BATCH {
-                        cut_before!(j + 1);
-                        cut_queued = 0;
-                    }
-                }
+                cut_queue!(j, &gather[j as usize], true);
                 queue!(j, &gather[j as usize], true);
             }
         }
@@ -1216,8 +1233,27 @@ fn particle_rates<const D: usize, K: Kernel, const ART: bool, const CN: bool, co
         if gj.body != bi {
             let rule = model.pairs.rule(bi, gj.body);
             if let PairRule::Wall = rule {
-                // A wall's image: a neighbour of the same body while pressed (see `pressed`).
+                // A wall's image: a neighbour of the same body while pressed (see `pressed`),
+                // from when the pair touches the wall (`boundary::wall_share`).
                 if !(inside && pressed(gi, gj, &xij)) {
+                    continue;
+                }
+                let share = wall_share(model, gi, gj);
+                if share == 0.0 {
+                    continue;
+                }
+                if share < 1.0 {
+                    // Coming into touch: summed at once (rare), and cut as any pair is.
+                    cut_queue!(j, gj, inside);
+                    wall_pair::<D, K, ART, CN, DIFF>(
+                        kernel,
+                        (i, gi),
+                        (j, gj),
+                        share,
+                        pass,
+                        &mut sums,
+                    );
+                    count += 1;
                     continue;
                 }
             } else if inside {
@@ -1347,14 +1383,7 @@ fn particle_rates<const D: usize, K: Kernel, const ART: bool, const CN: bool, co
                 continue;
             }
         }
-        if pass.any_failed {
-            cut_queue[cut_queued] = j;
-            cut_queued += (inside & cuttable(gj)) as usize;
-            if cut_queued == BATCH {
-                cut_before!(j + 1);
-                cut_queued = 0;
-            }
-        }
+        cut_queue!(j, gj, inside);
         queue!(j, gj, inside);
     }
     if pass.any_failed {
@@ -1569,6 +1598,33 @@ fn conserve_chunk<const D: usize, K: Kernel, const ART: bool, const CN: bool, co
         s.de[l] -= 0.5 * mj * veg;
         s.de_lag[l] -= 0.5 * mj * ueg;
     }
+}
+
+/// A wall's image pair counted in part, `share` of it ([`crate::boundary::wall_share`]): every
+/// term of a pair in [`conserve_chunk`] is linear in the neighbour's mass or volume, so the
+/// pair's share is the pair with j's record carrying `share` of both. Summed at once in the
+/// first lane (rare: only while a face comes into touch with a wall).
+#[cold]
+#[inline(never)]
+fn wall_pair<const D: usize, K: Kernel, const ART: bool, const CN: bool, const DIFF: bool>(
+    kernel: K,
+    (i, gi): (usize, &Gather<D>),
+    (j, gj): (u32, &Gather<D>),
+    share: f64,
+    pass: &Pass<D>,
+    sums: &mut LaneSums<D>,
+) {
+    let part = Gather {
+        m: share * gj.m,
+        vol: share * gj.vol,
+        ..*gj
+    };
+    let pad = &pass.gather[pass.padding as usize];
+    let mut js = [pass.padding; LANES];
+    let mut gs = [pad; LANES];
+    js[0] = j;
+    gs[0] = &part;
+    conserve_chunk::<D, K, ART, CN, DIFF>(kernel, (i, gi), (&js, &gs), pass, sums);
 }
 
 /// CN-SPH's velocity gradient and density rate from the plain sum G_i = −Σ_j V_j v_ij ⊗ ∇_i W_ij
@@ -2094,7 +2150,7 @@ fn meets_in_pass<const D: usize>(model: &Model<D>, gi: &Gather<D>, gj: &Gather<D
     match model.pairs.rule(gi.body, gj.body) {
         PairRule::Conserve => true,
         PairRule::Contact(_) => false,
-        PairRule::Wall => pressed(gi, gj, &xij),
+        PairRule::Wall => pressed(gi, gj, &xij) && wall_share(model, gi, gj) > 0.0,
     }
 }
 
@@ -2147,9 +2203,14 @@ fn cut_pair<const D: usize, K: Kernel, const CN: bool>(
         CutKind::Closed => false,
         CutKind::Open => true,
     };
-    // The kernel's gradient factor, shared by the two terms.
+    // The kernel's gradient factor, shared by the two terms, and by a wall's image pair
+    // only its share (every term is linear in it; see `wall_pair`).
     let r = dot(xij, xij).sqrt();
-    let gf = kernel.grad_factor::<D>(r, 0.5 * (gi.h + gj.h));
+    let share = match pass.model.pairs.rule(gi.body, gj.body) {
+        PairRule::Wall => wall_share(pass.model, gi, gj),
+        _ => 1.0,
+    };
+    let gf = share * kernel.grad_factor::<D>(r, 0.5 * (gi.h + gj.h));
     let (cut, share) = tension_cut::<D, K, CN>(kernel, (i, j), xij, (r, gf), pass);
     let mj = gj.m;
     for a in 0..D {
@@ -2860,12 +2921,14 @@ shape = { type = "rectangle", min = [0.0, 0.0], max = [8.0e-3, 6.0e-3] }
     }
 
     /// CN-SPH beside a wall: B counts a wall's images only while they are pressed on the
-    /// particle, as the rate pass does (`pressed`). A block on the wall y = 0 in a linear
+    /// particle, as the rate pass does (`pressed`), and from when the face touches the wall, the
+    /// share the rate pass counts (`boundary::wall_share`). A block on the wall y = 0 in a linear
     /// velocity field v = v0 ŷ + G x: lifting off (v0 > 0, unstressed), the face's B is the
     /// free surface's and the corrected L is G to round-off at every particle; pressed on
-    /// (v0 < 0), the face's B is the symmetry plane's, images counted. Until 2026-11-27 B
-    /// counted the images always, and a lifted face's L was off by the half of the support
-    /// that the rate pass no longer summed.
+    /// (v0 < 0) but only touching (its face Δp/2 off the plane), the free surface's too; sunk
+    /// 0.01 Δp into the wall's onset, neither; sunk past it (0.05 Δp), the symmetry plane's,
+    /// images counted. Until 2026-11-27 B counted the images always, and a lifted face's L was
+    /// off by the half of the support that the rate pass no longer summed.
     #[test]
     fn corrected_gradients_count_a_walls_images_only_while_pressed() {
         let deck = format!("{ELASTIC_BLOCK}[[wall]]\naxis = \"y\"\n");
@@ -2880,9 +2943,18 @@ shape = { type = "rectangle", min = [0.0, 0.0], max = [8.0e-3, 6.0e-3] }
         let g = Tensor::<2>::new(30.0, 0.0, 0.0, 20.0);
         let face: Vec<usize> = (0..p.n_real).filter(|&i| p.x[i][1] < 1e-3).collect();
         assert_eq!(face.len(), 8);
-        for (v0, lifting) in [(5.0, true), (-5.0, false)] {
+        let x0 = p.x.clone();
+        let dp = p.h0[0] / case.simulation.smoothing_ratio;
+        for (v0, sink, met) in [
+            (5.0, 0.0, Some(false)),
+            (-5.0, 0.0, Some(false)),
+            (-5.0, 0.01, None),
+            (-5.0, 0.05, Some(true)),
+        ] {
+            let lifting = v0 > 0.0;
             p.truncate_to_real();
-            for i in 0..p.n_real {
+            for (i, x) in x0.iter().enumerate().take(p.n_real) {
+                p.x[i] = x - Vector::<2>::new(0.0, sink * dp);
                 p.v[i] = g * p.x[i] + Vector::<2>::new(0.0, v0);
             }
             crate::boundary::rebuild_ghosts(&mut p, &wall);
@@ -2915,10 +2987,23 @@ shape = { type = "rectangle", min = [0.0, 0.0], max = [8.0e-3, 6.0e-3] }
                 &all,
                 &mut mirrored,
             );
-            let want = if lifting { &alone } else { &mirrored };
             for &i in &face {
                 assert_ne!(alone[i].b, mirrored[i].b, "particle {i}");
-                assert_eq!(c[i].b, want[i].b, "particle {i}, lifting: {lifting}");
+                match met {
+                    Some(true) => assert_eq!(c[i].b, mirrored[i].b, "particle {i}, sunk {sink}"),
+                    Some(false) => assert_eq!(c[i].b, alone[i].b, "particle {i}, v0 {v0}"),
+                    None => {
+                        let (a, m) = (
+                            (c[i].b - alone[i].b).norm(),
+                            (c[i].b - mirrored[i].b).norm(),
+                        );
+                        let gap = (alone[i].b - mirrored[i].b).norm();
+                        assert!(
+                            a > 1e-3 * gap && m > 1e-3 * gap,
+                            "particle {i}: {a} {m} of {gap}"
+                        );
+                    }
+                }
             }
             if lifting {
                 let mut b: Vec<Tensor<2>> = c.iter().map(|c| c.b).collect();

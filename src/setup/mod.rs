@@ -132,6 +132,11 @@ pub fn build<const D: usize>(case: &Case) -> Result<(Particles<D>, Model<D>)> {
         density_diffusion: s.density_diffusion,
         colour: None,
         formulation: s.formulation,
+        walls: planes
+            .iter()
+            .filter(|p| p.wall.is_some())
+            .copied()
+            .collect(),
     };
     let mut model = model;
     if model
