@@ -12,11 +12,12 @@
 //! meets b (and the bodies welded to b) by [`crate::physics::PairRule::Wall`]: a pair of a
 //! particle and an image passes through the conservation equations, as a symmetry plane's
 //! ghost does, while it is pressed together (closing, or compressive along the line between
-//! them) and not at all while it pulls apart. Pressed, a frictionless rigid wall and a plane of
-//! symmetry are the same boundary (zero normal velocity, zero shear): the run is the symmetry
-//! plane's to the bit. Where the plane would pull, the wall lets go and the face is free;
-//! CN-SPH's correction B then leaves the image out too (`physics::corrections`), so a lifted
-//! face is corrected as the free surface it is. Other bodies meet b's image as they meet b
+//! them) and not at all while it pulls apart, from when the particle or the image's source
+//! touches the plane ([`wall_share`]). Pressed, a frictionless rigid wall and a plane of
+//! symmetry are the same boundary (zero normal velocity, zero shear): past the onset the
+//! equations are the symmetry plane's. Where the plane would pull, the wall lets go and the
+//! face is free; CN-SPH's correction B then leaves the image out too (`physics::corrections`),
+//! so a lifted face is corrected as the free surface it is. Other bodies meet b's image as they meet b
 //! (through the contact).
 //!
 //! **A body that moves into a symmetry plane meets it as a wall.** A symmetry plane is a cut
@@ -107,10 +108,10 @@ pub const WALL_ONSET: f64 = 0.02;
 /// 0.005, 0.01, 0.02, 0.05 and 0.1 Δp it reads 9.9 / 9.0, 10.0 / 8.9, 10.0 / 9.0, 9.9 / 9.1 and
 /// 9.9 / 9.1 %. A face at rest on the wall does: it settles into the onset before the wall
 /// holds it in full, a compliance of WALL_ONSET Δp. Under a bar pushed on by a body force the
-/// wall departs from the bonded plane by 14 % of the bar's largest mean velocity with 0.02 Δp,
-/// 37 % with 0.05 and 69 % with 0.1 (L/Δp = 100), and half as much at half the spacing; hence
-/// the narrow onset (measured 2026-12-04). A face pressed on the wall sits past the onset, and is
-/// met as a symmetry plane meets it.
+/// wall departs from the bonded plane, over 40 µs, by 15 % of the bar's largest mean velocity
+/// with an onset of 0.02 Δp, 37 % with 0.05 and 69 % with 0.1 (L/Δp = 100), and by half as
+/// much at half the spacing; hence the narrow onset (measured 2026-12-04). A face pressed on
+/// the wall sits past the onset, and is met as a symmetry plane meets it.
 pub fn wall_share<const D: usize>(
     walls: &[Plane],
     image: u32,
