@@ -237,17 +237,20 @@ fn a_wall_beside_symmetry_planes_matches_the_whole_model() {
 /// (aluminium, R = 10 mm, 50 m/s) coming down on the plane z = 0 between the two (quarter
 /// model) is the twin impact, which the plane meets as a frictionless wall: the force the plane
 /// exerts (the rate of the sphere's momentum) is Hertz's for two equal spheres at 100 m/s (peak
-/// 85.96 kN, contact 24.20 µs) within VALIDATION.md §D's 10 % at R/Δp = 20, the error smaller
-/// than at 16, and the sphere leaves at 95 % of its speed or more, in both formulations.
-/// Measured 2026-12-04 (peak force, contact time, at R/Δp = 16 / 20 / 30): conventional SPH
-/// +9.6 / +8.7 / +7.0 %, −10.0 / −9.0 / −8.4 %; CN-SPH +8.1 / +7.9 / +8.7 %, −8.5 / −8.1 /
-/// −8.9 % (at 30 CN-SPH's error is larger than at 20, by under a point: README, Not yet; 30
-/// takes minutes, and is not run here). The twins through the contact read within 1 % (peak)
-/// and 2 % (contact time) of these at R/Δp = 16. Before the wall met a particle only from
-/// touching (`boundary::wall_share`), it met the sphere as a flat punch: +15.9 / +13.6 % and
-/// −21.4 / −19.3 % at R/Δp = 16 / 20 (conventional), 14.9 kN at 0.92 µs against Hertz's 3.2;
-/// and before a plane under a moving body was a wall, the bonded plane pulled on the patch as
-/// it parted and the sphere left at 88 % of its speed.
+/// 85.96 kN; contact 24.20 µs, counted while the force is above zero, as `strike validate --case
+/// hertz` counts it) within VALIDATION.md §D's 10 % at R/Δp = 20, the error smaller than at 16,
+/// and the sphere leaves at 95 % of its speed or more, in both formulations. Measured
+/// 2026-12-04 (peak force, contact time, at R/Δp = 16 / 20): conventional SPH +9.6 / +8.7 %,
+/// −7.6 / −6.6 %; CN-SPH +8.1 / +7.9 %, −5.1 / −5.2 %. Counted from 1 % of the peak instead
+/// (this test's measure until that day, which leaves out about 3 % of Hertz's own time) the
+/// contact read −10.0 / −9.0 / −8.4 % at R/Δp = 16 / 20 / 30 (conventional; peak +7.0 % at 30)
+/// and −8.5 / −8.1 / −8.9 % (CN-SPH; peak +8.7 % at 30, README, Not yet); 30 takes minutes
+/// and is not run here. The twins through the contact read within 1 % (peak) and 2 % (contact
+/// time) of the wall at 16. Before the wall met a particle only from touching
+/// (`boundary::wall_share`), it met the sphere as a flat punch: +15.9 / +13.6 % and −21.4 /
+/// −19.3 % (from 1 % of the peak) at R/Δp = 16 / 20 (conventional), 14.9 kN at 0.92 µs against
+/// Hertz's 3.2; and before a plane under a moving body was a wall, the bonded plane pulled on
+/// the patch as it parted and the sphere left at 88 % of its speed.
 #[test]
 fn a_sphere_rebounds_off_a_symmetry_plane_as_off_its_twin() {
     let path = Path::new(env!("CARGO_MANIFEST_DIR")).join("examples/hertz_spheres.toml");
@@ -281,9 +284,10 @@ fn a_sphere_rebounds_off_a_symmetry_plane_as_off_its_twin() {
                 last = (t, pz);
             }
             let f_max = force.iter().map(|f| f.1).fold(0.0, f64::max);
+            // Above zero: the momentum of a sphere that meets nothing changes by round-off.
             let on: Vec<f64> = force
                 .iter()
-                .filter(|f| f.1 > 0.01 * f_max)
+                .filter(|f| f.1 > 1e-6 * f_max)
                 .map(|f| f.0)
                 .collect();
             assert!(
