@@ -17,8 +17,8 @@
 //! symmetry are the same boundary (zero normal velocity, zero shear): past the onset the
 //! equations are the symmetry plane's. Where the plane would pull, the wall lets go and the
 //! face is free; CN-SPH's correction B then leaves the image out too (`physics::corrections`),
-//! so a lifted face is corrected as the free surface it is. Other bodies meet b's image as they meet b
-//! (through the contact).
+//! so a lifted face is corrected as the free surface it is. Other bodies meet b's image as they
+//! meet b (through the contact).
 //!
 //! **A body that moves into a symmetry plane meets it as a wall.** A symmetry plane is a cut
 //! through material that continues on its other side, whose velocity normal to the plane is
@@ -109,12 +109,12 @@ pub const WALL_ONSET: f64 = 0.02;
 /// sharp switch at Δp/2 read +21 / +18 % of Hertz's peak. The sphere does not see its width: over
 /// 0.005, 0.01, 0.02, 0.05 and 0.1 Δp its contact time reads −9.9 / −9.0, −10.0 / −8.9, −10.0 /
 /// −9.0, −9.9 / −9.1 and −9.9 / −9.1 %. A face at rest on the wall does: it settles into the
-/// onset before the wall holds it in full, a compliance of WALL_ONSET Δp. Under a bar pushed on
-/// by a body force the
-/// wall departs from the bonded plane, over 40 µs, by 15 % of the bar's largest mean velocity
-/// with an onset of 0.02 Δp, 37 % with 0.05 and 69 % with 0.1 (L/Δp = 100), and by half as
-/// much at half the spacing; hence the narrow onset (measured 2026-12-04). A face pressed on
-/// the wall sits past the onset, and is met as a symmetry plane meets it.
+/// onset before the wall holds it in full, a compliance of WALL_ONSET Δp. Under a bar pushed
+/// on by a body force the wall departs from the bonded plane, over 40 µs, by 15 % of the bar's
+/// largest mean velocity with an onset of 0.02 Δp, 37 % with 0.05 and 69 % with 0.1 (L/Δp =
+/// 100), and by half as much at half the spacing; hence the narrow onset (measured
+/// 2026-12-04). A face pressed on the wall sits past the onset, and is met as a symmetry plane
+/// meets it.
 pub fn wall_share<const D: usize>(
     walls: &[Plane],
     image: u32,
