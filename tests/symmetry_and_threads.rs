@@ -240,8 +240,9 @@ fn a_wall_beside_symmetry_planes_matches_the_whole_model() {
 /// 85.96 kN; contact 24.20 µs, counted while the force is above zero, as `strike validate --case
 /// hertz` counts it) within VALIDATION.md §D's 10 % at R/Δp = 20, the error smaller than at 16,
 /// and the sphere leaves at 95 % of its speed or more, in both formulations. Measured
-/// 2026-12-04 (peak force, contact time, at R/Δp = 16 / 20): conventional SPH +9.6 / +8.7 %,
-/// −7.6 / −6.6 %; CN-SPH +8.1 / +7.9 %, −5.1 / −5.2 %. Counted from 1 % of the peak instead
+/// 2026-12-04 (peak force, contact time, at R/Δp = 16 / 20 / 30, 30 by hand): conventional SPH
+/// +9.6 / +8.7 / +7.0 %, −7.6 / −6.6 / −5.3 %; CN-SPH +8.1 / +7.9 / +8.7 %, −5.1 / −5.2 / −5.5 %
+/// (CN-SPH's peak larger at 30 than at 20: README, Not yet). Counted from 1 % of the peak instead
 /// (this test's measure until that day, which leaves out about 3 % of Hertz's own time) the
 /// contact read −10.0 / −9.0 / −8.4 % at R/Δp = 16 / 20 / 30 (conventional; peak +7.0 % at 30)
 /// and −8.5 / −8.1 / −8.9 % (CN-SPH; peak +8.7 % at 30, README, Not yet); 30 takes minutes
