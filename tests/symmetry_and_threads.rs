@@ -233,6 +233,31 @@ fn a_wall_beside_symmetry_planes_matches_the_whole_model() {
     );
 }
 
+/// The force a quarter model's plane z = 0 exerts on its one body, step by step (the rate of
+/// the body's z momentum, times 4), and the body's final z velocity; prints the run's speed.
+fn plane_force(case: &Case) -> (Vec<(f64, f64)>, f64) {
+    let mut sim = Simulation::<3>::new(case).unwrap();
+    let n = sim.particles.n_real;
+    let mass: f64 = (0..n).map(|i| sim.particles.m[i]).sum();
+    let end = case.simulation.end_time;
+    let (mut last, mut force) = ((0.0, mass * case.bodies[0].velocity[2]), Vec::new());
+    let clock = std::time::Instant::now();
+    while sim.state.time < end * (1.0 - 1e-12) {
+        sim.step(end - sim.state.time).unwrap();
+        let p = &sim.particles;
+        let pz: f64 = (0..n).map(|i| p.m[i] * p.v[i][2]).sum();
+        let t = sim.state.time;
+        force.push((t, 4.0 * (pz - last.1) / (t - last.0)));
+        last = (t, pz);
+    }
+    eprintln!(
+        "{n} particles, {} steps, {:.3e} particle-steps/s",
+        force.len(),
+        (n * force.len()) as f64 / clock.elapsed().as_secs_f64()
+    );
+    (force, last.1 / mass)
+}
+
 /// Hertz's twin spheres on a symmetry plane: one sphere of `examples/hertz_spheres.toml`
 /// (aluminium, R = 10 mm, 50 m/s) coming down on the plane z = 0 between the two (quarter
 /// model) is the twin impact, which the plane meets as a frictionless wall: the force the plane
@@ -271,19 +296,8 @@ fn a_sphere_rebounds_off_a_symmetry_plane_as_off_its_twin() {
                 position: 0.0,
                 wall: false,
             });
-            let mut sim = Simulation::<3>::new(&case).unwrap();
-            let mass: f64 = (0..sim.particles.n_real).map(|i| sim.particles.m[i]).sum();
             let v0 = case.bodies[0].velocity[2];
-            let end = case.simulation.end_time;
-            let (mut last, mut force) = ((0.0, mass * v0), Vec::new());
-            while sim.state.time < end * (1.0 - 1e-12) {
-                sim.step(end - sim.state.time).unwrap();
-                let p = &sim.particles;
-                let pz: f64 = (0..p.n_real).map(|i| p.m[i] * p.v[i][2]).sum();
-                let t = sim.state.time;
-                force.push((t, 4.0 * (pz - last.1) / (t - last.0)));
-                last = (t, pz);
-            }
+            let (force, v_end) = plane_force(&case);
             let f_max = force.iter().map(|f| f.1).fold(0.0, f64::max);
             // Above zero: the momentum of a sphere that meets nothing changes by round-off.
             let on: Vec<f64> = force
@@ -296,7 +310,6 @@ fn a_sphere_rebounds_off_a_symmetry_plane_as_off_its_twin() {
                 "{f:?}, R/Δp = {ratio}: the plane never pushed"
             );
             let t_c = on[on.len() - 1] - on[0];
-            let v_end = last.1 / mass;
             let (df, dt) = (f_max / f_hertz - 1.0, t_c / t_hertz - 1.0);
             eprintln!(
                 "{f:?}, R/Δp = {ratio}: peak {:.2} kN ({:+.2} %), contact {:.2} µs ({:+.2} %), leaves at {v_end:.3} m/s",
