@@ -12,8 +12,8 @@
 //! meets b (and the bodies welded to b) by [`crate::physics::PairRule::Wall`]: a pair of a
 //! particle and an image passes through the conservation equations, as a symmetry plane's
 //! ghost does, while it is pressed together (closing, or compressive along the line between
-//! them) and not at all while it pulls apart, from when the particle or the image's source
-//! touches the plane ([`wall_share`]). Pressed, a frictionless rigid wall and a plane of
+//! them) and not at all while it pulls apart, from when the material between the particle and
+//! the image's source reaches the plane ([`wall_share`]). Pressed, a frictionless rigid wall and a plane of
 //! symmetry are the same boundary (zero normal velocity, zero shear): past the onset the
 //! equations are the symmetry plane's. Where the plane would pull, the wall lets go and the
 //! face is free; CN-SPH's correction B then leaves the image out too (`physics::corrections`),
@@ -88,39 +88,57 @@ impl Plane {
 /// ([`wall_share`]).
 pub const WALL_ONSET: f64 = 0.02;
 
+/// The difference in height over a wall, in spacings, up to which the two particles of a
+/// wall's image pair lie side by side in one layer, and from which one lies above the other
+/// ([`wall_share`]); smoothly between.
+pub const WALL_LAYER: (f64, f64) = (0.25, 0.75);
+
 /// The share of the pair of particle i (at `xi`, spacing `dpi`) and a wall's image j (at `xj`,
-/// its source's spacing `dpj`, of image body `image`) that the pass counts: 0 until the nearer
-/// of the two touches the wall, 1 once it is pressed [`WALL_ONSET`] spacings past touching,
-/// smoothly (t²(3 − 2t)) between; over every walled plane the pair straddles, the least.
+/// its source's spacing `dpj`, of image body `image`) that the pass counts: 0 until the
+/// material between i and j's source reaches the wall, 1 once it is pressed [`WALL_ONSET`]
+/// spacings past touching, smoothly (t²(3 − 2t)) between; over every walled plane the pair
+/// straddles, the least. The same share for the mirrored pair (j's source, image of i).
 ///
 /// A particle stands for a cell reaching Δp/2 beyond its centre, so it touches the wall when
-/// its centre is Δp/2 from the plane, and no sooner: only from then on is the material between
-/// it and an image continuous. Met whole whenever the pair lies within the support, a curved
-/// body was met over every particle within 2h of the plane: one of Hertz's spheres
-/// (`tests/symmetry_and_threads.rs`) met it as a flat punch from the first step (14.9 kN at
-/// 0.92 µs against Hertz's 3.2), peaked 15.9 / 13.6 % high and let go after a contact time
-/// 21.4 / 19.3 % short at R/Δp = 16 / 20, where its twin through the contact was within 8.6 /
-/// 7.3 % (contact times counted from 1 % of the peak force, here and below, which leaves out
-/// about 3 % of Hertz's own). Met from touching, it peaks +9.6 / +8.7 % and lets go after
-/// −10.0 / −9.0 % (−7.6 / −6.6 % counted from zero force; conventional SPH), within 1 % (peak)
-/// and 2 % (contact time) of the twin at 16.
+/// its centre is Δp/2 from the plane, and no sooner. Where the pair's two particles lie one
+/// above the other (their heights over the wall differ by [`WALL_LAYER`].1 Δp or more), the
+/// segment between i and j crosses the plane under the lower one, and the pair counts from
+/// when the lower one touches. Where they lie side by side in the face's layer (heights within
+/// [`WALL_LAYER`].0 Δp), the segment crosses the plane between the two, where the face reaches
+/// the wall only once both cells do: the pair counts from when the higher one touches. Between
+/// the two, the height the pair counts from goes smoothly from the higher one's to the lower
+/// one's. A flat face lies in one layer, so a face pressed on the wall is met as a symmetry
+/// plane meets it.
+///
+/// Met whole whenever the pair lay within the support, a curved body was met over every
+/// particle within 2h of the plane: one of Hertz's spheres (`tests/symmetry_and_threads.rs`)
+/// met it as a flat punch from the first step (14.9 kN at 0.92 µs against Hertz's 3.2),
+/// peaking 15.9 / 13.6 % high at R/Δp = 16 / 20. Met from when the lower particle of the pair
+/// touched (2026-12-04), a face particle beside the patch met the images of its touching
+/// neighbours as if in contact itself, and the wall was a stiffer contact than the twin
+/// through the contact by a gap that did not close with refinement: at 10 µs into the
+/// loading, 1.121 / 1.099 × Hertz's force at R/Δp = 20 / 30 against the twin's 1.100 / 1.074
+/// (conventional SPH), peaks +8.7 / +7.0 % against +7.3 / +4.8 %. Counted as above, the wall
+/// reads 1.062 × at 10 µs and a peak of +8.0 / +5.3 / +4.1 % at R/Δp = 16 / 20 / 30, at or
+/// below the twin's (measured 2026-12-04, later).
 ///
 /// The onset is smoothed because a pair switched on whole within one step is an impulse: a
-/// sharp switch at Δp/2 read +21 / +18 % of Hertz's peak. The sphere does not see its width: over
-/// 0.005, 0.01, 0.02, 0.05 and 0.1 Δp its contact time reads −9.9 / −9.0, −10.0 / −8.9, −10.0 /
-/// −9.0, −9.9 / −9.1 and −9.9 / −9.1 %. A face at rest on the wall does: it settles into the
-/// onset before the wall holds it in full, a compliance of WALL_ONSET Δp. Under a bar pushed
-/// on by a body force the wall departs from the bonded plane, over 40 µs, by 15 % of the bar's
-/// largest mean velocity with an onset of 0.02 Δp, 37 % with 0.05 and 69 % with 0.1 (L/Δp =
-/// 100), and by half as much at half the spacing; hence the narrow onset (measured
-/// 2026-12-04). A face pressed on the wall sits past the onset, and is met as a symmetry plane
-/// meets it.
+/// sharp switch at Δp/2 read +21 / +18 % of Hertz's peak. The sphere does not see its width
+/// (0.005 to 0.1 Δp). A face at rest on the wall does: it settles into the onset before the
+/// wall holds it in full, a compliance of WALL_ONSET Δp. Under a bar pushed on by a body force
+/// the wall departs from the bonded plane, over 40 µs, by 15 % of the bar's largest mean
+/// velocity with an onset of 0.02 Δp, 37 % with 0.05 and 69 % with 0.1 (L/Δp = 100), and by
+/// half as much at half the spacing; hence the narrow onset (measured 2026-12-04).
 pub fn wall_share<const D: usize>(
     walls: &[Plane],
     image: u32,
     (xi, dpi): (&[f64; D], f64),
     (xj, dpj): (&[f64; D], f64),
 ) -> f64 {
+    let smooth = |t: f64| {
+        let t = t.clamp(0.0, 1.0);
+        t * t * (3.0 - 2.0 * t)
+    };
     let mut share = 1.0_f64;
     for plane in walls {
         let Some(walled) = plane.wall else { continue };
@@ -134,9 +152,12 @@ pub fn wall_share<const D: usize>(
         if di < 0.0 || dj >= 0.0 {
             continue;
         }
-        let touch = (di / dpi).min(-dj / dpj);
-        let t = ((0.5 - touch) / WALL_ONSET).clamp(0.0, 1.0);
-        share = share.min(t * t * (3.0 - 2.0 * t));
+        // Heights over the wall in spacings: i's, and j's source's.
+        let (ti, tj) = (di / dpi, -dj / dpj);
+        let (lower, rise) = (ti.min(tj), (ti - tj).abs());
+        let (beside, above) = WALL_LAYER;
+        let touch = lower + rise * smooth((above - rise) / (above - beside));
+        share = share.min(smooth((0.5 - touch) / WALL_ONSET));
     }
     share
 }
@@ -373,6 +394,27 @@ mod tests {
         );
         // The mirrored pair, and the nearer particle's touch whichever side it is on.
         assert_eq!(share(1.5, 0.5 - 0.25 * WALL_ONSET, 2), quarter);
+        // Side by side in the face's layer, the pair waits for the higher one: a face
+        // particle beside the patch does not meet its touching neighbour's image.
+        assert_eq!(share(0.47, 0.67, 2), 0.0, "beside, one touching");
+        assert_eq!(share(0.67, 0.47, 2), 0.0, "the mirrored pair");
+        assert_eq!(share(0.3, 0.45, 2), 1.0, "beside, both pressed");
+        // One above the other, the lower one's touch: the face's second layer meets the
+        // images of the face's pressed particles.
+        assert_eq!(share(0.47, 0.47 + WALL_LAYER.1 + 0.05, 2), 1.0, "above");
+        // Half-way between, the pair counts from half the rise above the lower one, smoothly
+        // (here a quarter spacing higher).
+        let mid = |lower: f64| share(lower, lower + 0.5 * (WALL_LAYER.0 + WALL_LAYER.1), 2);
+        assert_eq!(
+            mid(0.26),
+            0.0,
+            "its lower one touching, not the height counted"
+        );
+        assert_eq!(
+            mid(0.22),
+            1.0,
+            "pressed past the onset at the height counted"
+        );
         // Body 1 meets the plane bonded: its images (3) are not a wall's.
         assert_eq!(share(0.5, 1.5, 3), 1.0);
         // j on the model's side: the pair does not straddle the plane.

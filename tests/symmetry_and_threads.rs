@@ -263,20 +263,20 @@ fn plane_force(case: &Case) -> (Vec<(f64, f64)>, f64) {
 /// model) is the twin impact, which the plane meets as a frictionless wall: the force the plane
 /// exerts (the rate of the sphere's momentum) is Hertz's for two equal spheres at 100 m/s (peak
 /// 85.96 kN; contact 24.20 µs, counted while the force is above zero, as `strike validate --case
-/// hertz` counts it) within VALIDATION.md §D's 10 % at R/Δp = 20, the error smaller than at 16,
-/// and the sphere leaves at 95 % of its speed or more, in both formulations. Measured
-/// 2026-12-04 (peak force, contact time, at R/Δp = 16 / 20 / 30, 30 by hand): conventional SPH
-/// +9.6 / +8.7 / +7.0 %, −7.6 / −6.6 / −5.3 %; CN-SPH +8.1 / +7.9 / +8.7 %, −5.1 / −5.2 / −5.5 %
-/// (CN-SPH's peak larger at 30 than at 20: README, Not yet). Counted from 1 % of the peak instead
-/// (this test's measure until that day, which leaves out about 3 % of Hertz's own time) the
-/// contact read −10.0 / −9.0 / −8.4 % at R/Δp = 16 / 20 / 30 (conventional; peak +7.0 % at 30)
-/// and −8.5 / −8.1 / −8.9 % (CN-SPH; peak +8.7 % at 30, README, Not yet); 30 takes minutes
-/// and is not run here. The twins through the contact read within 1 % (peak) and 2 % (contact
-/// time) of the wall at 16. Before the wall met a particle only from touching
-/// (`boundary::wall_share`), it met the sphere as a flat punch: +15.9 / +13.6 % and −21.4 /
-/// −19.3 % (from 1 % of the peak) at R/Δp = 16 / 20 (conventional), 14.9 kN at 0.92 µs against
-/// Hertz's 3.2; and before a plane under a moving body was a wall, the bonded plane pulled on
-/// the patch as it parted and the sphere left at 88 % of its speed.
+/// hertz` counts it) within 7 % at R/Δp = 20 (VALIDATION.md §D holds the twins to 10 %), the
+/// error smaller than at 16, and the sphere leaves at 95 % of its speed or more, in both formulations. Measured
+/// 2026-12-04, latest (peak force, contact time, at R/Δp = 16 / 20 / 30, 30 by hand):
+/// conventional SPH +8.0 / +5.3 / +4.1 %, −4.2 / −3.5 / −2.8 %; CN-SPH +5.6 / +5.5 / +7.3 %,
+/// −1.0 / −3.1 / −3.1 % (CN-SPH's peak larger at 30 than at 20: README, Not yet); the twins
+/// through the contact read +7.3 / +4.8 % and +6.6 / +5.3 % at 20 / 30. 30 takes minutes and
+/// is not run here. Before a pair of face particles side by side waited for both to touch
+/// (`boundary::wall_share`, that day), a face particle beside the patch met its touching
+/// neighbours' images as if in contact itself: +9.6 / +8.7 / +7.0 % and −7.6 / −6.6 / −5.3 %
+/// (conventional), +8.1 / +7.9 / +8.7 % and −5.1 / −5.2 / −5.5 % (CN-SPH). Before the wall
+/// met a particle only from touching, it met the sphere as a flat punch: +15.9 / +13.6 % and
+/// −21.4 / −19.3 % (from 1 % of the peak) at R/Δp = 16 / 20 (conventional), 14.9 kN at
+/// 0.92 µs against Hertz's 3.2; and before a plane under a moving body was a wall, the bonded
+/// plane pulled on the patch as it parted and the sphere left at 88 % of its speed.
 #[test]
 fn a_sphere_rebounds_off_a_symmetry_plane_as_off_its_twin() {
     let path = Path::new(env!("CARGO_MANIFEST_DIR")).join("examples/hertz_spheres.toml");
@@ -319,8 +319,11 @@ fn a_sphere_rebounds_off_a_symmetry_plane_as_off_its_twin() {
                 100.0 * dt
             );
             let error = df.abs().max(dt.abs());
+            // 7 %: VALIDATION.md's 10 % for the twins, and the wall at least as close as they
+            // are (+7.3 / +6.6 % at R/Δp = 20); the face particle beside the patch that met its
+            // neighbour's image read +8.7 / +7.9 %.
             assert!(
-                ratio < 20.0 || error < 0.10,
+                ratio < 20.0 || error < 0.07,
                 "{f:?}, R/Δp = {ratio}: Hertz's error {error}"
             );
             assert!(v_end >= -0.95 * v0, "{f:?}: the sphere left at {v_end} m/s");
