@@ -12,13 +12,13 @@
 //! meets b (and the bodies welded to b) by [`crate::physics::PairRule::Wall`]: a pair of a
 //! particle and an image passes through the conservation equations, as a symmetry plane's
 //! ghost does, while it is pressed together (closing, or compressive along the line between
-//! them) and not at all while it pulls apart, from when the material between the particle and
-//! the image's source reaches the plane ([`wall_share`]). Pressed, a frictionless rigid wall and a plane of
-//! symmetry are the same boundary (zero normal velocity, zero shear): past the onset the
-//! equations are the symmetry plane's. Where the plane would pull, the wall lets go and the
-//! face is free; CN-SPH's correction B then leaves the image out too (`physics::corrections`),
-//! so a lifted face is corrected as the free surface it is. Other bodies meet b's image as they
-//! meet b (through the contact).
+//! them) and not at all while it pulls apart, from when the material between the particle
+//! and the image's source reaches the plane ([`wall_share`]). Pressed, a frictionless rigid
+//! wall and a plane of symmetry are the same boundary (zero normal velocity, zero shear): past
+//! the onset the equations are the symmetry plane's. Where the plane would pull, the wall lets
+//! go and the face is free; CN-SPH's correction B then leaves the image out too
+//! (`physics::corrections`), so a lifted face is corrected as the free surface it is. Other
+//! bodies meet b's image as they meet b (through the contact).
 //!
 //! **A body that moves into a symmetry plane meets it as a wall.** A symmetry plane is a cut
 //! through material that continues on its other side, whose velocity normal to the plane is
@@ -119,8 +119,9 @@ pub const WALL_LAYER: (f64, f64) = (0.25, 0.75);
 /// through the contact by a gap that did not close with refinement: at 10 µs into the
 /// loading, 1.121 / 1.099 × Hertz's force at R/Δp = 20 / 30 against the twin's 1.100 / 1.074
 /// (conventional SPH), peaks +8.7 / +7.0 % against +7.3 / +4.8 %. Counted as above, the wall
-/// reads 1.062 × at 10 µs and a peak of +8.0 / +5.3 / +4.1 % at R/Δp = 16 / 20 / 30, at or
-/// below the twin's (measured 2026-12-04, later).
+/// reads 1.062 × Hertz's force at 10 µs at R/Δp = 30 and peaks +8.0 / +5.3 / +4.1 % at R/Δp =
+/// 16 / 20 / 30, at or below the twin's (measured 2026-12-04, later). Heights are in each
+/// particle's own spacing, which is one spacing where a body meets its own image.
 ///
 /// The onset is smoothed because a pair switched on whole within one step is an impulse: a
 /// sharp switch at Δp/2 read +21 / +18 % of Hertz's peak. The sphere does not see its width
@@ -392,7 +393,7 @@ mod tests {
             (quarter - 0.15625).abs() < 1e-12,
             "a quarter of the way: {quarter}"
         );
-        // The mirrored pair, and the nearer particle's touch whichever side it is on.
+        // The mirrored pair, and the lower particle's touch whichever side it is on.
         assert_eq!(share(1.5, 0.5 - 0.25 * WALL_ONSET, 2), quarter);
         // Side by side in the face's layer, the pair waits for the higher one: a face
         // particle beside the patch does not meet its touching neighbour's image.
