@@ -265,8 +265,8 @@ fn plane_force(case: &Case) -> (Vec<(f64, f64)>, f64) {
 /// 85.96 kN; contact 24.20 µs, counted while the force is above zero, as `strike validate --case
 /// hertz` counts it) within 7 % at R/Δp = 20 (VALIDATION.md §D holds the twins to 10 %), the
 /// error smaller than at 16, and the sphere leaves at 95 % of its speed or more, in both
-/// formulations. Measured 2026-12-04, latest (peak force, contact time, at R/Δp = 16 / 20 / 30, 30 by hand):
-/// conventional SPH +8.0 / +5.3 / +4.1 %, −4.2 / −3.5 / −2.8 %; CN-SPH +5.6 / +5.5 / +7.3 %,
+/// formulations. Measured 2026-12-04, latest (peak force, contact time, at R/Δp = 16 / 20 /
+/// 30, 30 by hand): conventional SPH +8.0 / +5.3 / +4.1 %, −4.2 / −3.5 / −2.8 %; CN-SPH +5.6 / +5.5 / +7.3 %,
 /// −1.0 / −3.1 / −3.1 % (CN-SPH's peak larger at 30 than at 20: README, Not yet); the twins
 /// through the contact read +7.3 / +4.8 % and +6.6 / +5.3 % at 20 / 30. 30 takes minutes and
 /// is not run here. Before a pair of face particles side by side waited for both to touch
