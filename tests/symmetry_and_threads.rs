@@ -266,15 +266,15 @@ fn plane_force(case: &Case) -> (Vec<(f64, f64)>, f64) {
 /// hertz` counts it) within 7 % at R/Δp = 20 (VALIDATION.md §D holds the twins to 10 %), the
 /// error smaller than at 16, and the sphere leaves at 95 % of its speed or more, in both
 /// formulations. Measured 2026-12-04, latest (peak force, contact time, at R/Δp = 16 / 20 /
-/// 30, 30 by hand): conventional SPH +8.0 / +5.3 / +4.1 %, −4.2 / −3.5 / −2.8 %; CN-SPH +5.6 / +5.5 / +7.3 %,
-/// −1.0 / −3.1 / −3.1 % (CN-SPH's peak larger at 30 than at 20: README, Not yet); the twins
-/// through the contact read +7.3 / +4.8 % and +6.6 / +5.3 % at 20 / 30. 30 takes minutes and
-/// is not run here. Before a pair of face particles side by side waited for both to touch
-/// (`boundary::wall_share`, that day), a face particle beside the patch met its touching
-/// neighbours' images as if in contact itself: +9.6 / +8.7 / +7.0 % and −7.6 / −6.6 / −5.3 %
-/// (conventional), +8.1 / +7.9 / +8.7 % and −5.1 / −5.2 / −5.5 % (CN-SPH). Before the wall
-/// met a particle only from touching, it met the sphere as a flat punch: +15.9 / +13.6 % and
-/// −21.4 / −19.3 % (from 1 % of the peak) at R/Δp = 16 / 20 (conventional), 14.9 kN at
+/// 30, 30 by hand): conventional SPH +8.0 / +5.3 / +4.1 %, −4.2 / −3.5 / −2.8 %; CN-SPH +5.6 /
+/// +5.5 / +7.3 %, −1.0 / −3.1 / −3.1 % (CN-SPH's peak larger at 30 than at 20: README, Not
+/// yet); the twins through the contact read +7.3 / +4.8 % and +6.6 / +5.3 % at 20 / 30. 30
+/// takes minutes and is not run here. Before a pair of face particles side by side waited for
+/// both to touch (`boundary::wall_share`, that day), a face particle beside the patch met its
+/// touching neighbours' images as if in contact itself: +9.6 / +8.7 / +7.0 % and −7.6 / −6.6 /
+/// −5.3 % (conventional), +8.1 / +7.9 / +8.7 % and −5.1 / −5.2 / −5.5 % (CN-SPH). Before the
+/// wall met a particle only from touching, it met the sphere as a flat punch: +15.9 / +13.6 %
+/// and −21.4 / −19.3 % (from 1 % of the peak) at R/Δp = 16 / 20 (conventional), 14.9 kN at
 /// 0.92 µs against Hertz's 3.2; and before a plane under a moving body was a wall, the bonded
 /// plane pulled on the patch as it parted and the sphere left at 88 % of its speed.
 #[test]
