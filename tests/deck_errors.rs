@@ -504,6 +504,68 @@ fn density_diffusion_out_of_range() {
     assert_eq!(case.simulation.density_diffusion, 0.0);
 }
 
+/// Johnson–Cook failure with Tuler–Butcher's spall: the two spall models cannot both be given,
+/// Tuler–Butcher's threshold and impulse come together, and a library metal's failure takes
+/// Tuler–Butcher's criterion instead of its spall strength while keeping its D1–D5.
+#[test]
+fn johnson_cook_with_tuler_butcher_keys() {
+    let strength =
+        "strength = { type = \"von_mises\", shear_modulus = 28.6e9, yield_stress = 0.26e9 }";
+    let with = |damage: &str| edit(strength, &format!("{strength}\ndamage = {damage}"));
+    let jc = "type = \"johnson_cook\", d1 = 0.13, d2 = 0.13, d3 = -1.5";
+    let (message, help) = deck_error(
+        &with(&format!(
+            "{{ {jc}, spall_strength = 1.2e9, tuler_butcher_threshold = 0.7e9, tuler_butcher_impulse = 1e9 }}"
+        )),
+        "materials.al.damage.tuler_butcher_threshold",
+        9,
+    );
+    assert!(message.contains("two spall models"), "{message}");
+    assert!(help.contains("spall_strength"), "{help}");
+    let (message, help) = deck_error(
+        &with(&format!("{{ {jc}, tuler_butcher_threshold = 0.7e9 }}")),
+        "materials.al.damage.tuler_butcher_impulse",
+        9,
+    );
+    assert!(message.contains("missing its damage integral"), "{message}");
+    assert!(help.contains("or neither"), "{help}");
+    deck_error(
+        &with(&format!("{{ {jc}, tuler_butcher_impulse = 1e9 }}")),
+        "materials.al.damage.tuler_butcher_threshold",
+        9,
+    );
+    // A library metal: its Johnson–Cook failure kept, its spall strength swapped.
+    let deck = edit(
+        "[materials.al]\ndensity = 2785.0\neos = { type = \"mie_gruneisen\", c0 = 5328.0, s1 = 1.338, gamma0 = 2.0 }\nstrength = { type = \"von_mises\", shear_modulus = 28.6e9, yield_stress = 0.26e9 }",
+        "[materials.al]\nlibrary = \"ofhc_copper\"\ndamage = { spall_strength = 0.0, tuler_butcher_threshold = 1.0e9, tuler_butcher_impulse = 2.0e9 }",
+    );
+    let case = parse(&deck, "good.toml").unwrap();
+    let library = parse(
+        &edit(
+            "[materials.al]\ndensity = 2785.0\neos = { type = \"mie_gruneisen\", c0 = 5328.0, s1 = 1.338, gamma0 = 2.0 }\nstrength = { type = \"von_mises\", shear_modulus = 28.6e9, yield_stress = 0.26e9 }",
+            "[materials.al]\nlibrary = \"ofhc_copper\"",
+        ),
+        "good.toml",
+    )
+    .unwrap();
+    let (damage, base) = (&case.materials[0].damage, &library.materials[0].damage);
+    assert!(base.spall.is_some() && base.johnson_cook.is_some());
+    assert_eq!(damage.johnson_cook, base.johnson_cook);
+    assert_eq!(damage.spall, None);
+    assert_eq!(
+        damage.tuler_butcher,
+        Some(strike::material::TulerButcher {
+            threshold: 1.0e9,
+            exponent: 2.0,
+            impulse: 2.0e9
+        })
+    );
+    assert_eq!(damage.kind(), "johnson_cook");
+    // And back: its values read as the same models.
+    let again = strike::case::DamageSpec::from_values(damage.kind(), &damage.values()).unwrap();
+    assert_eq!(&again, damage);
+}
+
 /// Tuler–Butcher's damage table: its exponent is checked and named with its line, its
 /// missing impulse asked for, and a good table read with λ's default of 2.
 #[test]

@@ -324,6 +324,11 @@ fn model_line(
 pub fn describe(e: &Entry) -> String {
     use crate::material::{DAMAGE_MODELS, EOS_MODELS, STRENGTH_MODELS};
     let s = &e.spec;
+    // Johnson–Cook failure lists Tuler–Butcher's three constants last: only where it is used.
+    let mut damage = s.damage.values();
+    if s.damage.johnson_cook.is_some() && s.damage.tuler_butcher.is_none() {
+        damage.truncate(damage.len() - 3);
+    }
     format!(
         "{} — {}\n  density  {} kg/m³\n  eos      {}\n  strength {}\n  damage   {}\n  sources  {}\n",
         e.name,
@@ -331,7 +336,7 @@ pub fn describe(e: &Entry) -> String {
         s.density,
         model_line(&EOS_MODELS, s.eos.kind(), &s.eos.values()),
         model_line(&STRENGTH_MODELS, s.strength.kind(), &s.strength.values()),
-        model_line(&DAMAGE_MODELS, s.damage.kind(), &s.damage.values()),
+        model_line(&DAMAGE_MODELS, s.damage.kind(), &damage),
         e.sources
     )
 }

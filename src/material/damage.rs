@@ -36,7 +36,8 @@
 //! the density ratchet up through every rebound, to 1.4 ρ0 and 65 GPa in fragments at rest,
 //! and the pairs' switching made energy: +10 % in `examples/ogive_plate.toml`, 0.67 % then.)
 //!
-//! Three models, each optional per material (the first two are alternatives):
+//! Three models, each optional per material (the first two are alternatives; either goes with
+//! the third, whose deck table names the spall's constants: [`JOHNSON_COOK_WITH_SPALL`]):
 //! - [`Spall`]: deterministic activation at the spall strength σ_s, then crack growth at the
 //!   Grady–Kipp speed c_g = 0.4 c_L (Grady & Kipp 1980, Int. J. Rock Mech. 17, 147; as used in
 //!   SPH by Benz & Asphaug 1994, Icarus 107, 98, eq. 11): while the largest principal stress
@@ -268,7 +269,11 @@ impl Parameters for JohnsonCookFailure {
     }
 }
 
-/// Johnson–Cook failure's parameters and, last, an optional spall strength (0: none).
+/// Johnson–Cook failure's parameters and, last, an optional spall: a spall strength (the
+/// [`Spall`] model), or Tuler–Butcher's criterion (its three constants prefixed
+/// `tuler_butcher_`), or neither (0: none). A particle with both grows one indicator D by the
+/// sum of their increments and fails at D = 1 (Miner's linear rule, as a plastic strain and a
+/// tension pulse that each use up part of the material's ductility add up).
 pub const JOHNSON_COOK_WITH_SPALL: &[Param] = &[
     JohnsonCookFailure::PARAMS[0],
     JohnsonCookFailure::PARAMS[1],
@@ -279,6 +284,24 @@ pub const JOHNSON_COOK_WITH_SPALL: &[Param] = &[
     Param::optional(
         "spall_strength",
         "the spall strength σ_s in Pa (0: none), e.g. 1.2e9",
+        Valid::NonNegative,
+        0.0,
+    ),
+    Param::optional(
+        "tuler_butcher_threshold",
+        "Tuler–Butcher's threshold σ0 in Pa, instead of a spall strength (0: none), e.g. 0.7e9",
+        Valid::NonNegative,
+        0.0,
+    ),
+    Param::optional(
+        "tuler_butcher_exponent",
+        "Tuler–Butcher's exponent λ of the excess stress, e.g. 2",
+        Valid::Closed(1.0, 10.0),
+        2.0,
+    ),
+    Param::optional(
+        "tuler_butcher_impulse",
+        "Tuler–Butcher's damage integral K_f at failure in Pa^λ s, e.g. 1e9 for λ = 2",
         Valid::NonNegative,
         0.0,
     ),

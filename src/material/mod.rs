@@ -218,7 +218,8 @@ pub const EOS_MODELS: [(&str, &[Param]); 3] = [
 ];
 
 /// The damage choices a deck can name: none, spall alone, Tuler–Butcher's rate-dependent spall
-/// alone, or Johnson–Cook failure with an optional spall strength (0: none).
+/// alone, or Johnson–Cook failure with an optional spall: a spall strength or Tuler–Butcher's
+/// criterion (0: none).
 pub const DAMAGE_MODELS: [(&str, &[Param]); 4] = [
     ("none", &[]),
     ("spall", Spall::PARAMS),
@@ -345,18 +346,23 @@ impl crate::case::DamageSpec {
     }
 
     pub fn values(&self) -> Vec<f64> {
-        if let Some(t) = self.tuler_butcher {
-            return t.values();
-        }
         let spall = self.spall.map_or(0.0, |s| s.strength);
-        match self.johnson_cook {
-            Some(f) => {
+        match (self.johnson_cook, self.tuler_butcher) {
+            (Some(f), tb) => {
                 let mut v = f.values();
                 v.push(spall);
+                // Tuler–Butcher's constants, a threshold of 0 for none.
+                let t = tb.unwrap_or(TulerButcher {
+                    threshold: 0.0,
+                    exponent: 2.0,
+                    impulse: 0.0,
+                });
+                v.extend(t.values());
                 v
             }
-            None if self.spall.is_some() => vec![spall],
-            None => vec![],
+            (None, Some(t)) => t.values(),
+            (None, None) if self.spall.is_some() => vec![spall],
+            (None, None) => vec![],
         }
     }
 
@@ -372,11 +378,41 @@ impl crate::case::DamageSpec {
                 ..Self::default()
             },
             _ => {
+                // JOHNSON_COOK_WITH_SPALL: D1–D5 and the rate, the spall strength, then
+                // Tuler–Butcher's threshold, exponent and impulse.
                 let n = JohnsonCookFailure::PARAMS.len();
+                let (strength, tb) = (v[n], &v[n + 1..n + 4]);
+                let (threshold, impulse) = (tb[0], tb[2]);
+                if strength > 0.0 && threshold > 0.0 {
+                    return Err(ParamError::new(
+                        "tuler_butcher_threshold",
+                        "a spall strength and Tuler–Butcher's criterion are two spall models \
+                         for one material",
+                        "give either `spall_strength` or the `tuler_butcher_` constants, \
+                         and set the other to 0",
+                    ));
+                }
+                if (threshold > 0.0) != (impulse > 0.0) {
+                    let (key, missing) = if threshold > 0.0 {
+                        ("tuler_butcher_impulse", "its damage integral K_f")
+                    } else {
+                        ("tuler_butcher_threshold", "its threshold σ0")
+                    };
+                    return Err(ParamError::new(
+                        key,
+                        format!("Tuler–Butcher's criterion is missing {missing}"),
+                        "give both `tuler_butcher_threshold` and `tuler_butcher_impulse` \
+                         (positive), or neither",
+                    ));
+                }
                 Self {
-                    spall: (v[n] > 0.0).then_some(Spall { strength: v[n] }),
+                    spall: (strength > 0.0).then_some(Spall { strength }),
                     johnson_cook: Some(JohnsonCookFailure::from_values(&v[..n])?),
-                    tuler_butcher: None,
+                    tuler_butcher: if threshold > 0.0 {
+                        Some(TulerButcher::from_values(tb)?)
+                    } else {
+                        None
+                    },
                 }
             }
         })
