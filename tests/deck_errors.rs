@@ -535,19 +535,14 @@ fn johnson_cook_with_tuler_butcher_keys() {
         9,
     );
     // A library metal: its Johnson–Cook failure kept, its spall strength swapped.
+    let own = "[materials.al]\ndensity = 2785.0\neos = { type = \"mie_gruneisen\", c0 = 5328.0, s1 = 1.338, gamma0 = 2.0 }\nstrength = { type = \"von_mises\", shear_modulus = 28.6e9, yield_stress = 0.26e9 }";
+    let copper = "[materials.al]\nlibrary = \"ofhc_copper\"";
     let deck = edit(
-        "[materials.al]\ndensity = 2785.0\neos = { type = \"mie_gruneisen\", c0 = 5328.0, s1 = 1.338, gamma0 = 2.0 }\nstrength = { type = \"von_mises\", shear_modulus = 28.6e9, yield_stress = 0.26e9 }",
-        "[materials.al]\nlibrary = \"ofhc_copper\"\ndamage = { spall_strength = 0.0, tuler_butcher_threshold = 1.0e9, tuler_butcher_impulse = 2.0e9 }",
+        own,
+        &format!("{copper}\ndamage = {{ spall_strength = 0.0, tuler_butcher_threshold = 1.0e9, tuler_butcher_impulse = 2.0e9 }}"),
     );
     let case = parse(&deck, "good.toml").unwrap();
-    let library = parse(
-        &edit(
-            "[materials.al]\ndensity = 2785.0\neos = { type = \"mie_gruneisen\", c0 = 5328.0, s1 = 1.338, gamma0 = 2.0 }\nstrength = { type = \"von_mises\", shear_modulus = 28.6e9, yield_stress = 0.26e9 }",
-            "[materials.al]\nlibrary = \"ofhc_copper\"",
-        ),
-        "good.toml",
-    )
-    .unwrap();
+    let library = parse(&edit(own, copper), "good.toml").unwrap();
     let (damage, base) = (&case.materials[0].damage, &library.materials[0].damage);
     assert!(base.spall.is_some() && base.johnson_cook.is_some());
     assert_eq!(damage.johnson_cook, base.johnson_cook);
