@@ -351,13 +351,15 @@ impl crate::case::DamageSpec {
             (Some(f), tb) => {
                 let mut v = f.values();
                 v.push(spall);
-                // Tuler–Butcher's constants, a threshold of 0 for none.
-                let t = tb.unwrap_or(TulerButcher {
-                    threshold: 0.0,
-                    exponent: 2.0,
-                    impulse: 0.0,
-                });
-                v.extend(t.values());
+                // Tuler–Butcher's constants; none is the table's defaults (a threshold of 0).
+                match tb {
+                    Some(t) => v.extend(t.values()),
+                    None => v.extend(
+                        damage::JOHNSON_COOK_WITH_SPALL[v.len()..]
+                            .iter()
+                            .map(|p| p.default.unwrap_or(0.0)),
+                    ),
+                }
                 v
             }
             (None, Some(t)) => t.values(),
