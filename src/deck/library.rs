@@ -5,7 +5,8 @@
 //! Strength: the paper's elastic–perfectly plastic von Mises where Steinberg tabulates G and
 //! Y0 (the verification cases use these), Johnson–Cook for the metals of Johnson & Cook's
 //! tables. Damage: every metal carries its spall strength (typical plate-impact values: spall
-//! strengths are rate dependent, so treat them as a starting point), and the Johnson–Cook
+//! strengths are rate dependent, so treat them as a starting point), basalt too (its gabbro's
+//! dynamic tensile strength), and the Johnson–Cook
 //! metals also carry Johnson–Cook failure where its constants are published. A deck switches
 //! failure off with `damage = { type = "none" }`.
 
@@ -288,8 +289,12 @@ pub fn entries() -> Vec<Entry> {
                 ("e_cv", 18.2e6), //
             ])),
             von_mises(22.7e9, 3.5e9), // Benz & Asphaug 1999: μ = 22.7 GPa, Y = 3.5 GPa
-            DamageSpec::default(),
-            "Tillotson, G, Y: Benz & Asphaug 1999",
+            // A rock breaks in tension at a tenth of its compressive strength or less: without
+            // it the basalt held 0.85 GPa of tension in the expanding projectile of a 4 km/s
+            // impact. San Marcos gabbro, basalt's coarse-grained twin, spalls at 147 ± 9 MPa
+            // under 1e4–1e5 /s (Lange, Ahrens & Boslough 1984; about 150 MPa, Ai & Ahrens 2004).
+            spall(0.15e9),
+            "Tillotson, G, Y: Benz & Asphaug 1999; spall: Lange, Ahrens & Boslough 1984 and Ai & Ahrens 2004 (San Marcos gabbro)",
         ),
     ]
 }
@@ -352,6 +357,8 @@ pub const REFERENCES: &[&str] = &[
     "Marsh 1980: S. P. Marsh (ed.), LASL Shock Hugoniot Data, University of California Press 1980",
     "Pan et al. 2025: R. C. Pan, B. X. Bie, Y. Cai, N. B. Zhang, L. Z. Chen, Y. X. Zhao, K. Li, H. W. Chai, L. Lu, S. N. Luo, Shock compression and spallation of polyamides 6 and 66, Int. J. Mech. Sci. (2025) 110127 (spall strengths of PA66 and PA6)",
     "Benz & Asphaug 1999: W. Benz, E. Asphaug, Catastrophic disruptions revisited, Icarus 142 (1999) 5–20",
+    "Lange, Ahrens & Boslough 1984: M. A. Lange, T. J. Ahrens, M. B. Boslough, Impact cratering and spall failure of gabbro, Icarus 58 (1984) 383–395 (San Marcos gabbro's dynamic tensile strength, 147 ± 9 MPa at 1e4–1e5 /s)",
+    "Ai & Ahrens 2004: H.-A. Ai, T. J. Ahrens, Dynamic tensile strength of terrestrial rocks and application to impact cratering, Meteorit. Planet. Sci. 39 (2004) 233–246 (San Marcos gabbro about 150 MPa)",
     "DynELA: O. Pantalé, DynELA finite-element code documentation, Taylor-bar benchmark (42CrMo4)",
 ];
 
@@ -422,8 +429,14 @@ mod tests {
             library_material("al_1100_o").unwrap().strength,
             StrengthSpec::Hydrodynamic
         );
-        // Library metals carry failure by default.
-        for name in ["al_6061_t6", "ofhc_copper", "steel_4340", "ti_6al_4v"] {
+        // Library metals carry failure by default, and so does the rock.
+        for name in [
+            "al_6061_t6",
+            "ofhc_copper",
+            "steel_4340",
+            "ti_6al_4v",
+            "basalt",
+        ] {
             assert!(!library_material(name).unwrap().damage.is_none(), "{name}");
         }
     }
