@@ -290,8 +290,9 @@ pub fn entries() -> Vec<Entry> {
             ])),
             von_mises(22.7e9, 3.5e9), // Benz & Asphaug 1999: μ = 22.7 GPa, Y = 3.5 GPa
             // A rock is far weaker in tension than in compression: without a spall strength the
-            // basalt held 0.85 GPa of tension in the expanding projectile of a 4 km/s impact. San Marcos gabbro, basalt's coarse-grained twin, spalls at 147 ± 9 MPa
-            // under 1e4–1e5 /s (Lange, Ahrens & Boslough 1984; about 150 MPa, Ai & Ahrens 2004).
+            // basalt held 0.85 GPa of tension in the expanding projectile of a 4 km/s impact.
+            // San Marcos gabbro, basalt's coarse-grained twin, spalls at 147 ± 9 MPa under
+            // 1e4–1e5 /s (Lange, Ahrens & Boslough 1984; about 150 MPa, Ai & Ahrens 2004).
             spall(0.15e9),
             "Tillotson, G, Y: Benz & Asphaug 1999; spall: Lange, Ahrens & Boslough 1984 and Ai & Ahrens 2004 (San Marcos gabbro)",
         ),
