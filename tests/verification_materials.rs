@@ -413,11 +413,12 @@ fn taylor_bars_converge_and_their_walls_agree() {
 
 /// Issue 13, item 6, hypervelocity (`strike validate --fine --case crater`): a 1 mm Al 6061-T6
 /// sphere at 6 km/s into a thick 6061-T6 block at d/Δp = 8 and 10 (about 18 minutes on 2
-/// cores). The crater's depth is reported against the Cour-Palais equation's (+36.1 / +33.5 % on
-/// 2026-11-29, README, Not yet); held: it does not move away from it with refinement, no
-/// mixing, momentum.
+/// cores). The crater's depth is reported against the Cour-Palais equation's (+16.6 / +22.8 % on
+/// 2026-12-04, README, Not yet); held: it does not move away from it with refinement, no
+/// mixing, momentum. It fails since the floor's measure stopped asking a whole lattice's count
+/// (`validate::contact::FLOOR_FILL`), whose jump at d/Δp = 8 (+35.7 %) had made it pass.
 #[test]
-#[ignore = "long (the validation command)"]
+#[ignore = "long (the validation command); fails since 2026-12-04: the crater deepens from d/Δp = 8 to 10 (+16.6 / +22.8 % of the Cour-Palais depth)"]
 fn hypervelocity_crater_does_not_move_away_with_refinement() {
     validated(strike::validate::contact::crater(true));
 }
@@ -437,19 +438,33 @@ fn cour_palais_crater_depth_by_hand() {
 /// The crater's measure (`validate::contact::crater_shape`) sees a bowl of known size: a
 /// quarter lattice (Δp = 0.05 mm) below z = 0 with a hemisphere of radius R about the origin
 /// taken out reads depth R and diameter 2R within a spacing, for two radii, with a few loose
-/// particles lying in the bowl (which must not count as its floor or its wall). The floor is
+/// particles lying in the bowl (which must not count as its floor or its wall), on a regular
+/// lattice and on one stretched along z by 3 % (0.97 ρ0, as the floor of the crater case is
+/// stretched by the flow) from the surface to 6 Δp below the bowl, regular below. The floor is
 /// looked for within R/4 of the axis, about the ratio of the crater case's (0.4 d against a
-/// crater some 3.5 d across), where the bowl's own curvature lifts it by 0.03 R.
+/// crater some 3.5 d across), where the bowl's own curvature lifts it by 0.03 R. With a whole
+/// lattice's count asked under the floor (`FLOOR_FILL` = 1, until 2026-12-04) the stretched
+/// bowl of R = 1.2 mm reads 1.494 mm deep, 5.9 spacings too deep, where the regular lattice
+/// starts (R = 0.8 mm: 0.825 mm, within the spacing by chance).
 #[test]
 fn crater_measure_reads_a_known_bowl() {
     let dp = 5e-5;
-    for radius in [0.8e-3, 1.2e-3] {
+    for (radius, stretch) in [(0.8e-3, 1.0), (1.2e-3, 1.0), (0.8e-3, 1.03), (1.2e-3, 1.03)] {
         let centre = |k: usize| (k as f64 + 0.5) * dp;
+        // The layers down to 6 Δp below the bowl are `stretch` Δp apart, the rest Δp.
+        let band = (radius / dp) as usize + 6;
+        let z = |k: usize| {
+            if k < band {
+                -centre(k) * stretch
+            } else {
+                -(centre(band) * stretch + (k - band) as f64 * dp)
+            }
+        };
         let mut block = Vec::new();
         for i in 0..40 {
             for j in 0..40 {
-                for k in 0..30 {
-                    let x = [centre(i), centre(j), -centre(k)];
+                for k in 0..40 {
+                    let x = [centre(i), centre(j), z(k)];
                     if x.iter().map(|c| c * c).sum::<f64>().sqrt() > radius {
                         block.push(x);
                     }
@@ -469,15 +484,15 @@ fn crater_measure_reads_a_known_bowl() {
         }
         let (depth, diameter) =
             strike::validate::contact::crater_shape(&block, (dp, 0.0, 4.0), 0.25 * radius).unwrap();
-        eprintln!("R = {radius}: depth {depth}, diameter {diameter}");
+        eprintln!("R = {radius}, stretched {stretch}: depth {depth}, diameter {diameter}");
         // Within a spacing, to the rounding of the lattice's centres.
         assert!(
             (depth - radius).abs() < 1.01 * dp,
-            "R = {radius}: depth {depth}"
+            "R = {radius}, stretched {stretch}: depth {depth}"
         );
         assert!(
             (diameter - 2.0 * radius).abs() < 1.01 * dp,
-            "R = {radius}: diameter {diameter}"
+            "R = {radius}, stretched {stretch}: diameter {diameter}"
         );
     }
 }
