@@ -484,7 +484,16 @@ fn crater_measure_reads_a_known_bowl() {
         }
         let (depth, diameter) =
             strike::validate::contact::crater_shape(&block, (dp, 0.0, 4.0), 0.25 * radius).unwrap();
-        eprintln!("R = {radius}, stretched {stretch}: depth {depth}, diameter {diameter}");
+        let spread =
+            strike::validate::contact::floor_spread(&block, (dp, 4.0), 0.25 * radius).unwrap();
+        eprintln!(
+            "R = {radius}, stretched {stretch}: depth {depth}, diameter {diameter}, spread {spread}"
+        );
+        // A floor of whole layers is a plateau: every share reads the same layer.
+        assert!(
+            spread.abs() < 0.01 * dp,
+            "R = {radius}, stretched {stretch}: spread {spread}"
+        );
         // Within a spacing, to the rounding of the lattice's centres.
         assert!(
             (depth - radius).abs() < 1.01 * dp,
@@ -495,6 +504,35 @@ fn crater_measure_reads_a_known_bowl() {
             "R = {radius}, stretched {stretch}: diameter {diameter}"
         );
     }
+}
+
+/// The crater's floor stands on no plateau where a loose layer lies on it, and
+/// `floor_spread` sees it: the bowl of R = 0.8 mm of `crater_measure_reads_a_known_bowl` with
+/// three layers inside its wall filled to 40 % (the lattice sites whose index sum is 0 or 2
+/// modulo 5; rubble, or a failed layer lifting off). Half a lattice's count reads the floor at
+/// the loose layer's top, nine tenths at its bottom, on the wall: the two part by more than the
+/// spacing that `strike validate --case crater` allows (2 Δp; 0 without the layer, and 1.0 Δp
+/// with the layer filled to 60 %).
+#[test]
+fn crater_floor_spread_sees_a_loose_layer() {
+    let (dp, radius) = (5e-5, 0.8e-3);
+    let centre = |k: usize| (k as f64 + 0.5) * dp;
+    let mut block = Vec::new();
+    for i in 0..40 {
+        for j in 0..40 {
+            for k in 0..40 {
+                let x = [centre(i), centre(j), -centre(k)];
+                let r = x.iter().map(|c| c * c).sum::<f64>().sqrt();
+                let loose = r > radius - 3.0 * dp && matches!((i + j + k) % 5, 0 | 2);
+                if r > radius || loose {
+                    block.push(x);
+                }
+            }
+        }
+    }
+    let spread = strike::validate::contact::floor_spread(&block, (dp, 4.0), 0.25 * radius).unwrap();
+    eprintln!("spread {} Δp", spread / dp);
+    assert!(spread > 1.5 * dp, "spread {spread}");
 }
 
 /// Rubble keeps its energy and its density. A cube of failed aluminium (every particle at
