@@ -1725,7 +1725,8 @@ pub const FLOOR_DENSE: f64 = 0.9;
 /// and the depth that [`FLOOR_FILL`] reads between them is the measure's choice, not the
 /// crater's. In `examples/crater.toml` at 6 µs (by hand on 2026-12-04, within 0.4 mm of the
 /// axis) they read 1.865 and 1.966 mm deep at d/Δp = 6 (0.6 Δp apart), 1.961 and 1.961 mm at
-/// 8, and 2.030 and 2.208 mm at 10 (1.8 Δp apart).
+/// 8, and 2.030 and 2.208 mm at 10 (1.8 Δp apart); within 0.4 d_eq, as [`crater`] reads them,
+/// 0.58 and 0.71 Δp apart at d/Δp = 6 and 8 (`strike validate --case crater`, 2026-12-04).
 pub fn floor_spread(block: &[[f64; 3]], (dp, mirrors): (f64, f64), reach: f64) -> Result<f64> {
     let loose = floor_at(block, (dp, mirrors), reach, FLOOR_LOOSE)?;
     let dense = floor_at(block, (dp, mirrors), reach, FLOOR_DENSE)?;
