@@ -445,7 +445,8 @@ fn cour_palais_crater_depth_by_hand() {
 /// crater some 3.5 d across), where the bowl's own curvature lifts it by 0.03 R. With a whole
 /// lattice's count asked under the floor (`FLOOR_FILL` = 1, until 2026-12-04) the stretched
 /// bowl of R = 1.2 mm reads 1.494 mm deep, 5.9 spacings too deep, where the regular lattice
-/// starts (R = 0.8 mm: 0.825 mm, within the spacing by chance).
+/// starts (R = 0.8 mm: 0.825 mm, within the spacing by chance). Every bowl's floor stands on a
+/// plateau (`floor_spread` 0).
 #[test]
 fn crater_measure_reads_a_known_bowl() {
     let dp = 5e-5;
@@ -510,9 +511,9 @@ fn crater_measure_reads_a_known_bowl() {
 /// `floor_spread` sees it: the bowl of R = 0.8 mm of `crater_measure_reads_a_known_bowl` with
 /// three layers inside its wall filled to 40 % (the lattice sites whose index sum is 0 or 2
 /// modulo 5; rubble, or a failed layer lifting off). Half a lattice's count reads the floor at
-/// the loose layer's top, nine tenths at its bottom, on the wall: the two part by more than the
-/// spacing that `strike validate --case crater` allows (2 Δp; 0 without the layer, and 1.0 Δp
-/// with the layer filled to 60 %).
+/// the loose layer's top, nine tenths at its lowest layer, which lies on the wall: the two part
+/// by more than the spacing that `strike validate --case crater` allows (2 Δp; 0 without the
+/// layer, and 1.0 Δp with the layer filled to 60 %).
 #[test]
 fn crater_floor_spread_sees_a_loose_layer() {
     let (dp, radius) = (5e-5, 0.8e-3);

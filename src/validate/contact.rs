@@ -1744,13 +1744,16 @@ pub fn floor_spread(block: &[[f64; 3]], (dp, mirrors): (f64, f64), reach: f64) -
 /// read off a loose layer is the measure's, not the crater's), no mixing and momentum. Reported
 /// beside the depth: the depth over the crater's diameter at the surface, against the 0.56–0.60
 /// of LDEF's aluminium craters (Love, Brownlee, King & Hörz 1993, LPSC 24, 809: normal impacts
-/// above 5 km/s, the ratio independent of size, speed and hardness). Coarse: d/Δp = 6 and 8 (5 minutes on 2 cores, measured 2026-12-04);
-/// `fine`: 8 and 10 (18 minutes). Measured on 2026-12-04 with the floor's three quarters of a
-/// lattice ([`FLOOR_FILL`]): depth 1.965 / 1.961 / 2.071 mm at d/Δp = 6 / 8 / 10, +11.2 / +16.6
-/// / +22.8 % of the fit at each lattice's sphere, diameter 3.60 / 3.53 / 3.14 mm, depth over
-/// diameter 0.546 / 0.555 / 0.659: both pairs fail their convergence check (README, Not yet).
-/// With the whole lattice's count the same runs read 1.965 / 2.283 / 2.140 mm (+11.2 / +35.7 /
-/// +26.8 %), the fine pair passing by the knife edge's jump at d/Δp = 8.
+/// above 5 km/s, the ratio independent of size, speed and hardness). Coarse: d/Δp = 6 and 8 (5
+/// minutes on 2 cores, measured 2026-12-04); `fine`: 8 and 10 (18 minutes). Measured on
+/// 2026-12-04 with the floor's three quarters of a lattice ([`FLOOR_FILL`]): depth 1.965 / 1.961
+/// / 2.071 mm at d/Δp = 6 / 8 / 10, +11.2 / +16.6 / +22.8 % of the fit at each lattice's
+/// sphere, diameter 3.60 / 3.53 / 3.14 mm, depth over diameter 0.546 / 0.555 / 0.659: both
+/// pairs fail their convergence check (README, Not yet). With the whole lattice's count the
+/// same runs read 1.965 / 2.283 / 2.140 mm (+11.2 / +35.7 / +26.8 %), the fine pair passing by
+/// the knife edge's jump at d/Δp = 8. At d/Δp = 10 the floor's spread would fail too (1.8 Δp
+/// by hand within 0.4 mm of the axis; `--fine` not run since): there the depth is read off a
+/// failed layer lifting off the floor.
 pub fn crater(fine: bool) -> Result<Outcome> {
     let source = "Cour-Palais crater depth (Christiansen 1991, NASA/TM-2009-214785)";
     let (hb, c) = (95.0, (68.9e9_f64 / 2700.0).sqrt());
