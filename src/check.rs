@@ -28,6 +28,13 @@ pub const CN_COST: f64 = 2.0;
 /// `check` sets a case up (and takes one step) only up to this many estimated particles.
 pub const SET_UP_LIMIT: f64 = 1.0e6;
 
+/// A body whose particles' mass misses its shape's (volume × ρ0, on the model's side of the
+/// symmetry planes) by more than this share gets a warning: each particle carries ρ0 Δp^D, so
+/// a coarse lattice's count is the body's mass, and a projectile's mass is what an impact
+/// scales with. Set past the share a symmetry plane's sampled cut can be off
+/// (`setup::shapes::model_share`: about a sample's width in 48 of the body's).
+pub const MASS_WARNING: f64 = 0.05;
+
 /// A run longer than this (s) gets a warning.
 const LONG_RUN: f64 = 86_400.0;
 
@@ -286,12 +293,15 @@ fn check_dim<const D: usize>(case: &Case) -> Result<String> {
     header(case, w);
     let _ = writeln!(w, "bodies:");
     let mut warnings = Vec::new();
+    let shapes = estimate_case_particles(case);
     for (b, body) in case.bodies.iter().enumerate() {
         let count = p.body.iter().filter(|&&x| x as usize == b).count();
         let mat = &sim.model.materials[body.material];
+        let mass = count as f64 * mat.rho0 * body.spacing.powi(D as i32);
+        let excess = count as f64 / shapes[b] - 1.0;
         let _ = writeln!(
             w,
-            "  {:<16} {:>9} particles  spacing {:.4e} m  h0 {:.4e} m  material {} (ρ0 {} kg/m³, c {:.0} m/s)  |v0| {:.4e} m/s{}",
+            "  {:<16} {:>9} particles  spacing {:.4e} m  h0 {:.4e} m  material {} (ρ0 {} kg/m³, c {:.0} m/s)  |v0| {:.4e} m/s  mass {:.4e} {} ({:+.1} % of its shape's){}",
             body.name,
             count,
             body.spacing,
@@ -300,8 +310,20 @@ fn check_dim<const D: usize>(case: &Case) -> Result<String> {
             mat.rho0,
             mat.sound_speed0(),
             body.velocity.iter().map(|v| v * v).sum::<f64>().sqrt(),
+            mass,
+            if D == 2 { "kg/m" } else { "kg" },
+            100.0 * excess,
             if body.motion == Motion::Prescribed { "  (prescribed motion)" } else { "" }
         );
+        if excess.abs() > MASS_WARNING {
+            warnings.push(format!(
+                "body '{}' carries {:+.1} % of its shape's mass: its {count} particles at spacing {:e} m for a volume of {:.1} spacings^{D} (a lattice this coarse does not fit the shape); a finer spacing brings the mass nearer",
+                body.name,
+                100.0 * excess,
+                body.spacing,
+                shapes[b]
+            ));
+        }
     }
     let nb = case.bodies.len();
     if nb > 1 {

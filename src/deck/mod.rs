@@ -87,29 +87,7 @@ pub fn estimate_ghosts(
 
 /// The whole shape's volume (area in 2D) over spacing^D.
 fn whole_shape_particles(shape: &Shape, spacing: f64, dimension: usize) -> f64 {
-    use std::f64::consts::PI;
-    let two_d = dimension == 2;
-    let measure = match shape {
-        Shape::Box { min, max } => (0..dimension.min(3))
-            .map(|k| (max[k] - min[k]).max(0.0))
-            .product(),
-        Shape::Sphere { radius, .. } if two_d => PI * radius * radius,
-        Shape::Sphere { radius, .. } => 4.0 / 3.0 * PI * radius.powi(3),
-        Shape::Cylinder { radius, length, .. } if two_d => 2.0 * radius * length,
-        Shape::Cylinder { radius, length, .. } => PI * radius * radius * length,
-        Shape::Ring {
-            inner_radius: ri,
-            outer_radius: ro,
-            ..
-        } if two_d => PI * (ro * ro - ri * ri),
-        Shape::Ring {
-            inner_radius: ri,
-            outer_radius: ro,
-            ..
-        } => 4.0 / 3.0 * PI * (ro.powi(3) - ri.powi(3)),
-        Shape::Mesh(m) => m.volume,
-    };
-    measure / spacing.powi(dimension as i32)
+    crate::setup::shapes::measure(shape, dimension) / spacing.powi(dimension as i32)
 }
 
 /// Memory this process may still use (see [`crate::machine::available_memory`]).
