@@ -1755,7 +1755,7 @@ pub fn floor_spread(block: &[[f64; 3]], (dp, mirrors): (f64, f64), reach: f64) -
 /// by hand within 0.4 mm of the axis; `--fine` not run since): there the depth is read off a
 /// failed layer lifting off the floor. Those runs' coarse spheres were 20 / 4.4 % heavy at
 /// d/Δp = 6 / 8; since the sphere keeps its mass (`setup::shapes::lattice`, 2026-12-04,
-/// latest) the case reads 2.047 / 1.963 mm (+24.0 / +18.5 %), the floor's spread 8.7 / 3.5 Δp,
+/// latest) the case reads 2.047 / 1.963 mm (+24.0 / +18.5 %), the floor's spread 6.5 / 3.5 Δp,
 /// failing at both: the failed layer's place on the axis, not the crater, sets the reading.
 pub fn crater(fine: bool) -> Result<Outcome> {
     let source = "Cour-Palais crater depth (Christiansen 1991, NASA/TM-2009-214785)";
