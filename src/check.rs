@@ -317,7 +317,7 @@ fn check_dim<const D: usize>(case: &Case) -> Result<String> {
         );
         if excess.abs() > MASS_WARNING {
             warnings.push(format!(
-                "body '{}' carries {:+.1} % of its shape's mass: its {count} particles at spacing {:e} m for a volume of {:.1} spacings^{D} (a lattice this coarse does not fit the shape); a finer spacing brings the mass nearer",
+                "body '{}' carries {:+.1} % of its shape's mass: its {count} particles at spacing {:e} m for a volume of {:.1} spacings^{D}: the lattice at this spacing does not hold the shape's volume; a finer spacing (or, for a box, sides that are whole multiples of it) brings the mass nearer",
                 body.name,
                 100.0 * excess,
                 body.spacing,

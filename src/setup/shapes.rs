@@ -223,10 +223,15 @@ pub const LATTICE_MASS_TOLERANCE: f64 = 0.02;
 /// keep the plain lattice, whose flat faces it fits (their layers Δp/2 inside), as do meshes.
 pub fn lattice<const D: usize>(shape: &Shape, dp: f64, planes: &[Plane]) -> Vec<Vector<D>> {
     let plain = lattice_points::<D>(shape, dp, planes, [false; 3]);
-    let curved = matches!(shape, Shape::Sphere { .. } | Shape::Ring { .. });
+    if !matches!(shape, Shape::Sphere { .. } | Shape::Ring { .. }) {
+        return plain
+            .into_par_iter()
+            .map(|x| conform(shape, x, dp))
+            .collect();
+    }
     let want = measure(shape, D) * model_share::<D>(shape, planes) / dp.powi(D as i32);
     let miss = |n: usize| (n as f64 - want).abs();
-    let chosen = if curved && miss(plain.len()) > LATTICE_MASS_TOLERANCE * want {
+    let chosen = if miss(plain.len()) > LATTICE_MASS_TOLERANCE * want {
         let free: Vec<usize> = (0..D)
             .filter(|&k| !planes.iter().any(|p| p.axis == k))
             .collect();
