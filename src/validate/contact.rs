@@ -1756,7 +1756,8 @@ pub fn floor_spread(block: &[[f64; 3]], (dp, mirrors): (f64, f64), reach: f64) -
 /// failed layer lifting off the floor. Those runs' coarse spheres were 20 / 4.4 % heavy at
 /// d/Δp = 6 / 8; since the sphere keeps its mass (`setup::shapes::lattice`, 2026-12-04,
 /// latest) the case reads 2.047 / 1.963 mm (+24.0 / +18.5 %), the floor's spread 6.5 / 3.5 Δp,
-/// failing at both: the failed layer's place on the axis, not the crater, sets the reading.
+/// failing at both, and with `fine` 1.963 / 1.997 mm (+18.5 / +19.6 %), the spread 3.5 / 1.46
+/// Δp: the failed layer's place on the axis, not the crater, sets the reading.
 pub fn crater(fine: bool) -> Result<Outcome> {
     let source = "Cour-Palais crater depth (Christiansen 1991, NASA/TM-2009-214785)";
     let (hb, c) = (95.0, (68.9e9_f64 / 2700.0).sqrt());
