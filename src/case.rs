@@ -190,6 +190,12 @@ pub struct BodySpec {
     pub velocity: [f64; 3],
     pub shape: Shape,
     pub motion: Motion,
+    /// `Some(b)` for a prescribed set (`[[prescribed]]`): the particles of body b's lattice that
+    /// lie in this body's `shape` (the set's region), taken out of body b, welded to it and
+    /// moving at this body's velocity ([`Motion::Prescribed`]). Such bodies follow the deck's
+    /// bodies, with b's material and spacing, and meet every other body as b does. None for a
+    /// body of the deck.
+    pub part_of: Option<usize>,
 }
 
 /// How a body moves.

@@ -238,11 +238,14 @@ fn describe_estimated(case: &Case, estimated: &[f64], dt: f64) -> String {
         "bodies (estimated: the case is too large for check to set up; `run` does):"
     );
     for (body, count) in case.bodies.iter().zip(estimated) {
+        let count = match body.part_of {
+            Some(of) => format!("a prescribed set of '{}'", case.bodies[of].name),
+            None => format!("~{count:>9.3e} particles"),
+        };
         let _ = writeln!(
             w,
-            "  {:<16} ~{:>9.3e} particles  spacing {:.4e} m  h0 {:.4e} m  material {}",
+            "  {:<16} {count}  spacing {:.4e} m  h0 {:.4e} m  material {}",
             body.name,
-            count,
             body.spacing,
             body.spacing * case.simulation.smoothing_ratio,
             case.materials[body.material].name
@@ -294,14 +297,28 @@ fn check_dim<const D: usize>(case: &Case) -> Result<String> {
     let _ = writeln!(w, "bodies:");
     let mut warnings = Vec::new();
     let shapes = estimate_case_particles(case);
+    let count_of = |b: usize| p.body.iter().filter(|&&x| x as usize == b).count();
     for (b, body) in case.bodies.iter().enumerate() {
-        let count = p.body.iter().filter(|&&x| x as usize == b).count();
+        let count = count_of(b);
         let mat = &sim.model.materials[body.material];
         let mass = count as f64 * mat.rho0 * body.spacing.powi(D as i32);
-        let excess = count as f64 / shapes[b] - 1.0;
+        // A body's lattice holds its prescribed sets' particles too; a set has no shape of its
+        // own to weigh against.
+        let whole: usize = (0..case.bodies.len())
+            .filter(|&s| s == b || case.bodies[s].part_of == Some(b))
+            .map(count_of)
+            .sum();
+        let excess = whole as f64 / shapes[b] - 1.0;
+        let share = match body.part_of {
+            Some(of) => format!("(a prescribed set of '{}')", case.bodies[of].name),
+            None if whole > count => {
+                format!("({:+.1} % of its shape's, with its sets)", 100.0 * excess)
+            }
+            None => format!("({:+.1} % of its shape's)", 100.0 * excess),
+        };
         let _ = writeln!(
             w,
-            "  {:<16} {:>9} particles  spacing {:.4e} m  h0 {:.4e} m  material {} (ρ0 {} kg/m³, c {:.0} m/s)  |v0| {:.4e} m/s  mass {:.4e} {} ({:+.1} % of its shape's){}",
+            "  {:<16} {:>9} particles  spacing {:.4e} m  h0 {:.4e} m  material {} (ρ0 {} kg/m³, c {:.0} m/s)  |v0| {:.4e} m/s  mass {:.4e} {} {share}{}",
             body.name,
             count,
             body.spacing,
@@ -312,10 +329,9 @@ fn check_dim<const D: usize>(case: &Case) -> Result<String> {
             body.velocity.iter().map(|v| v * v).sum::<f64>().sqrt(),
             mass,
             if D == 2 { "kg/m" } else { "kg" },
-            100.0 * excess,
             if body.motion == Motion::Prescribed { "  (prescribed motion)" } else { "" }
         );
-        if excess.abs() > MASS_WARNING {
+        if body.part_of.is_none() && excess.abs() > MASS_WARNING {
             warnings.push(format!(
                 "body '{}' carries {:+.1} % of its shape's mass: its {count} particles at spacing {:e} m for a volume of {:.1} spacings^{D}: the lattice at this spacing does not hold the shape's volume; a finer spacing (or, for a box, sides that are whole multiples of it) brings the mass nearer",
                 body.name,

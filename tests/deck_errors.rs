@@ -596,3 +596,65 @@ fn tuler_butcher_damage_keys() {
     );
     assert_eq!(case.materials[0].damage.kind(), "tuler_butcher");
 }
+
+/// A `[[prescribed]]` set: its body must exist (named with a suggestion), its name be new, its
+/// region be given; a good set becomes a prescribed body of its body's material and spacing,
+/// welded to its body and meeting the others as its body does.
+#[test]
+fn prescribed_set_keys() {
+    let set = |table: &str| format!("{GOOD}\n[[prescribed]]\n{table}\n");
+    let region =
+        "region = { type = \"box\", min = [-2e-3, -2e-3, -3e-4], max = [-1e-3, 2e-3, 1e-4] }";
+    let (message, help) = deck_error(
+        &set(&format!("body = \"plat\"\n{region}")),
+        "prescribed[0].body",
+        28,
+    );
+    assert!(message.contains("unknown body `plat`"), "{message}");
+    assert!(help.contains("did you mean `plate`"), "{help}");
+    let (message, _) = deck_error(
+        &set(&format!("name = \"sphere\"\nbody = \"plate\"\n{region}")),
+        "prescribed[0].name",
+        28,
+    );
+    assert!(
+        message.contains("duplicate body name `sphere`"),
+        "{message}"
+    );
+    let (message, help) = deck_error(&set("body = \"plate\""), "prescribed[0].region", 27);
+    assert!(message.contains("missing"), "{message}");
+    assert!(help.contains("region = {"), "{help}");
+    let (message, _) = deck_error(
+        &set(&format!(
+            "body = \"plate\"\n{region}\nvelocity = [0.0, 1.0]"
+        )),
+        "prescribed[0].velocity",
+        30,
+    );
+    assert!(message.contains("2 components"), "{message}");
+
+    let case = parse(&set(&format!("body = \"plate\"\n{region}")), "good.toml").unwrap();
+    let clamp = &case.bodies[2];
+    assert_eq!(clamp.name, "plate_prescribed");
+    assert_eq!(clamp.part_of, Some(1));
+    assert_eq!(clamp.motion, strike::case::Motion::Prescribed);
+    assert_eq!(clamp.velocity, [0.0; 3]);
+    assert_eq!(
+        (clamp.material, clamp.spacing),
+        (case.bodies[1].material, case.bodies[1].spacing)
+    );
+    let kinds: Vec<_> = case
+        .interactions
+        .iter()
+        .map(|i| (i.bodies, i.kind))
+        .collect();
+    let contact = case.interactions[0].kind;
+    assert_eq!(
+        kinds,
+        [
+            ([0, 1], contact),
+            ([0, 2], contact),
+            ([1, 2], strike::case::InteractionKind::Welded)
+        ]
+    );
+}

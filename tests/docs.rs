@@ -32,6 +32,9 @@ shape = { type = "rectangle", min = [0.0, 0.0], max = [0.01, 0.01] }
 bodies = ["a", "a"]
 [[symmetry]]
 axis = "x"
+[[prescribed]]
+body = "a"
+region = { type = "rectangle", min = [0.0, 0.0], max = [2.0e-3, 0.01] }
 [output]
 history_every = 5
 [[output.picture]]
@@ -72,6 +75,7 @@ fn every_deck_key_is_documented() {
         ("shape = {", true),
         ("bodies = [\"a\", \"a\"]", false),
         ("axis = \"x\"", false),
+        ("body = \"a\"", false),
         ("history_every = 5", false),
         ("times = [0.0]", false),
     ];
@@ -116,6 +120,7 @@ fn every_deck_key_is_documented() {
         "[[interaction]]",
         "[[symmetry]]",
         "[[wall]]",
+        "[[prescribed]]",
         "[output]",
         "[[output.picture]]",
     ] {

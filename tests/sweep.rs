@@ -154,7 +154,10 @@ fn the_ballistic_limit_is_bracketed_alike_one_or_two_at_a_time() {
 #[test]
 fn mistakes_are_named() {
     let cases: [(&[&str], &str); 6] = [
-        (&["--set", "body.bullet.velocity=100"], "rod, plate, frame"),
+        (
+            &["--set", "body.bullet.velocity=100"],
+            "no `body` is named `bullet`",
+        ),
         (&["--set", "body.rod.velocity=fast"], "not a finite number"),
         (&["--set", "simulation.cfl=5"], "simulation.cfl"),
         (&["--ballistic-limit", "rod"], "--speeds"),

@@ -61,9 +61,13 @@ pub fn estimate_particles(
 /// `check` and the deck's tests read.
 pub fn estimate_case_particles(case: &Case) -> Vec<f64> {
     let planes = crate::setup::symmetry_planes(case);
+    // A prescribed set's particles are its body's, counted there.
     case.bodies
         .iter()
-        .map(|b| estimate_particles(&b.shape, b.spacing, case.dimension, &planes))
+        .map(|b| match b.part_of {
+            Some(_) => 0.0,
+            None => estimate_particles(&b.shape, b.spacing, case.dimension, &planes),
+        })
         .collect()
 }
 
@@ -82,7 +86,44 @@ pub fn estimate_ghosts(
         2 => crate::setup::shapes::ghost_estimate::<2>(&b.shape, b.spacing, planes, reach),
         _ => crate::setup::shapes::ghost_estimate::<3>(&b.shape, b.spacing, planes, reach),
     };
-    bodies.iter().map(ghosts).sum()
+    // A prescribed set's particles are its body's, counted there.
+    bodies
+        .iter()
+        .filter(|b| b.part_of.is_none())
+        .map(ghosts)
+        .sum()
+}
+
+/// The interactions of prescribed set `set` (body index `set`, taken out of body `parent`):
+/// welded to its body and to the body's other sets, and meeting every other body (and its
+/// sets) as its body does: where the deck gives that pair an interaction, the set gets the
+/// same; otherwise both keep the default.
+fn inherit_interactions(
+    interactions: &mut Vec<InteractionSpec>,
+    bodies: &[BodySpec],
+    set: &BodySpec,
+    index: usize,
+) {
+    let Some(parent) = set.part_of else { return };
+    let root = |b: usize| bodies[b].part_of.unwrap_or(b);
+    for other in 0..index {
+        let inherited = if root(other) == parent {
+            Some((InteractionKind::Welded, set.location))
+        } else {
+            let pair = [parent, root(other)];
+            interactions
+                .iter()
+                .find(|i| i.bodies == pair || i.bodies == [pair[1], pair[0]])
+                .map(|i| (i.kind, i.location))
+        };
+        if let Some((kind, location)) = inherited {
+            interactions.push(InteractionSpec {
+                location,
+                bodies: [other, index],
+                kind,
+            });
+        }
+    }
 }
 
 /// The whole shape's volume (area in 2D) over spacing^D.
@@ -721,6 +762,7 @@ impl Ctx<'_> {
                 velocity,
                 shape,
                 motion,
+                part_of: None,
             });
         }
         let symmetry =
@@ -734,7 +776,12 @@ impl Ctx<'_> {
         let kind = (dimension, corrected, fails);
         self.check_memory(raw_bodies, &bodies, (&planes, ghosts), kind, memory)?;
 
-        let interactions = self.interactions(deck.interaction.as_deref(), &bodies)?;
+        let mut interactions = self.interactions(deck.interaction.as_deref(), &bodies)?;
+        let sets = self.prescribed(deck.prescribed.as_deref(), &bodies, &body_names, dimension)?;
+        for set in sets {
+            inherit_interactions(&mut interactions, &bodies, &set, bodies.len());
+            bodies.push(set);
+        }
         let output = self.output(deck.output.as_ref(), simulation.end_time)?;
 
         Ok(Case {
@@ -1301,6 +1348,122 @@ impl Ctx<'_> {
             )
         };
         Err(self.fail(span, key, message, fit))
+    }
+
+    /// The `[[prescribed]]` sets: each a body of its own (see [`BodySpec::part_of`]), named
+    /// uniquely, its region a shape of the deck's dimension, its velocity (zero by default: held
+    /// fixed) in m/s.
+    fn prescribed(
+        &self,
+        raw: Option<&[raw::Located<raw::Prescribed>]>,
+        bodies: &[BodySpec],
+        body_names: &HashMap<String, Range<usize>>,
+        dimension: usize,
+    ) -> Result<Vec<BodySpec>> {
+        let names: Vec<&str> = bodies.iter().map(|b| b.name.as_str()).collect();
+        let mut out: Vec<BodySpec> = Vec::new();
+        for (k, set) in raw.unwrap_or(&[]).iter().enumerate() {
+            let prefix = format!("prescribed[{k}]");
+            let anchor = set.anchor();
+            let r = set.get_ref();
+            let Some(body) = &r.body else {
+                return Err(self.missing(
+                    &anchor,
+                    &format!("{prefix}.body"),
+                    "the body whose particles the set takes",
+                    &format!("add e.g. `body = \"{}\"`", names[0]),
+                ));
+            };
+            let parent = names
+                .iter()
+                .position(|b| *b == body.get_ref())
+                .ok_or_else(|| {
+                    self.fail(
+                        body.span(),
+                        format!("{prefix}.body"),
+                        format!("unknown body `{}`", body.get_ref()),
+                        format!(
+                            "{}the bodies are {}",
+                            did_you_mean(body.get_ref(), names.iter().copied()),
+                            list(&names)
+                        ),
+                    )
+                })?;
+            let name = match &r.name {
+                Some(n) => {
+                    let key = format!("{prefix}.name");
+                    self.safe_name(n, &key, "a set's name", "\"clamp\"")?;
+                    let taken = body_names
+                        .get(n.get_ref())
+                        .map(|s| self.line_col(s.start).0);
+                    let taken = taken.or_else(|| {
+                        out.iter()
+                            .find(|b| &b.name == n.get_ref())
+                            .map(|b| b.location.line)
+                    });
+                    if let Some(line) = taken {
+                        return Err(self.fail(
+                            n.span(),
+                            key,
+                            format!(
+                                "duplicate body name `{}` (already used on line {line})",
+                                n.get_ref()
+                            ),
+                            "give the set a name no body or other set has",
+                        ));
+                    }
+                    n.get_ref().clone()
+                }
+                None => {
+                    let mut name = format!("{}_prescribed", names[parent]);
+                    let mut count = 1;
+                    while body_names.contains_key(&name) || out.iter().any(|b| b.name == name) {
+                        count += 1;
+                        name = format!("{}_prescribed{count}", names[parent]);
+                    }
+                    name
+                }
+            };
+            let region_key = format!("{prefix}.region");
+            let region = match &r.region {
+                Some(s) => self.shape(s, &region_key, dimension, &anchor)?,
+                None => {
+                    return Err(self.missing(
+                        &anchor,
+                        &region_key,
+                        "the region whose particles of the body the set takes",
+                        if dimension == 2 {
+                            "add e.g. `region = { type = \"rectangle\", min = [15e-3, -1e-3], max = [17e-3, 0.0] }`"
+                        } else {
+                            "add e.g. `region = { type = \"box\", min = [0.0, 0.0, -1e-3], max = [5e-3, 5e-3, 0.0] }`"
+                        },
+                    ))
+                }
+            };
+            let velocity = match &r.velocity {
+                Some(v) => self.vector(
+                    v,
+                    &format!("{prefix}.velocity"),
+                    dimension,
+                    if dimension == 2 {
+                        "[0.0, 10.0]"
+                    } else {
+                        "[0.0, 0.0, 10.0]"
+                    },
+                )?,
+                None => [0.0; 3],
+            };
+            out.push(BodySpec {
+                name,
+                location: self.location(&anchor),
+                velocity,
+                shape: region,
+                motion: Motion::Prescribed,
+                part_of: Some(parent),
+                ..bodies[parent].clone()
+            });
+        }
+        Ok(out)
     }
 
     fn interactions(

@@ -149,7 +149,18 @@ pub struct Deck {
     pub interaction: Option<Vec<Located<Interaction>>>,
     pub symmetry: Option<Vec<Located<Symmetry>>>,
     pub wall: Option<Vec<Located<Symmetry>>>,
+    pub prescribed: Option<Vec<Located<Prescribed>>>,
     pub output: Option<Located<Output>>,
+}
+
+/// A `[[prescribed]]` set: the particles of a body within a region, moving at a set velocity.
+#[derive(Debug, serde::Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct Prescribed {
+    pub name: Option<S<String>>,
+    pub body: Option<S<String>>,
+    pub region: Option<Shape>,
+    pub velocity: Option<S<Vec<f64>>>,
 }
 
 #[derive(Debug, serde::Deserialize)]

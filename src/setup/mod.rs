@@ -71,8 +71,8 @@ pub fn build<const D: usize>(case: &Case) -> Result<(Particles<D>, Model<D>)> {
         let mass = mat.rho0 * dp.powi(D as i32);
         let v = from3::<D>(body.velocity);
         let before = p.len();
-        let points = shapes::lattice::<D>(&body.shape, dp, &planes);
-        if let crate::case::Shape::Mesh(mesh) = &body.shape {
+        let points = body_lattice::<D>(case, b, &planes);
+        if let (crate::case::Shape::Mesh(mesh), None) = (&body.shape, body.part_of) {
             check_closed(case, b, mesh, &points)?;
         }
         p.reserve_exact(points.len());
@@ -81,6 +81,27 @@ pub fn build<const D: usize>(case: &Case) -> Result<(Particles<D>, Model<D>)> {
             let i = p.len() - 1;
             p.p[i] = mat.pressure(mat.rho0, 0.0);
             p.c[i] = mat.sound_speed(mat.rho0, 0.0);
+        }
+        if p.len() == before && body.part_of.is_some() {
+            let first = case.bodies.iter().position(|b| b.part_of.is_some());
+            let k = b - first.unwrap_or(b);
+            let parent = &case.bodies[body.part_of.unwrap_or(b)];
+            return Err(deck_error(
+                case,
+                body.location,
+                &format!("prescribed[{k}].region"),
+                format!("the prescribed set '{}' holds no particle: its region holds none of the particles of body '{}' (on the model's side of the symmetry planes), or an earlier set took them", body.name, parent.name),
+                "make the region cover the particles to hold, which sit at min + (i + ½) × spacing of the body's shape's bounding box",
+            ));
+        }
+        if p.len() == before && case.bodies.iter().any(|s| s.part_of == Some(b)) {
+            return Err(deck_error(
+                case,
+                body.location,
+                &format!("body[{b}].shape"),
+                format!("body '{}' has no particle left: its prescribed sets' regions hold every one of them", body.name),
+                "make the body larger than its sets' regions, or make it prescribed itself (`motion = \"prescribed\"`)",
+            ));
         }
         if p.len() == before {
             return Err(deck_error(
@@ -152,6 +173,36 @@ pub fn build<const D: usize>(case: &Case) -> Result<(Particles<D>, Model<D>)> {
     Ok((p, model))
 }
 
+/// The lattice points of body `b`: its shape's lattice, less the points its prescribed sets
+/// take; for a prescribed set, the points of its body's lattice in its region that no earlier
+/// set of that body took (so that a set's particles are exactly where the body's would be).
+fn body_lattice<const D: usize>(case: &Case, b: usize, planes: &[Plane]) -> Vec<Vector<D>> {
+    let body = &case.bodies[b];
+    let whole = body.part_of.unwrap_or(b);
+    let owner = &case.bodies[whole];
+    let sets: Vec<(usize, &BodySpec)> = case
+        .bodies
+        .iter()
+        .enumerate()
+        .filter(|(_, s)| s.part_of == Some(whole))
+        .collect();
+    let mut points = shapes::lattice::<D>(&owner.shape, owner.spacing, planes);
+    if sets.is_empty() {
+        return points;
+    }
+    // The set that takes a point: the first whose region holds it.
+    let taker = |x: &Vector<D>| {
+        sets.iter()
+            .find(|(_, s)| shapes::contains(&s.shape, x))
+            .map(|&(k, _)| k)
+    };
+    points.retain(|x| match body.part_of {
+        Some(_) => taker(x) == Some(b),
+        None => taker(x).is_none(),
+    });
+    points
+}
+
 /// The deck's symmetry planes with their model side: the side of the centre of all bodies'
 /// bounding boxes (the positive side when that centre lies on the plane, as for a sphere cut
 /// in quarters).
@@ -163,7 +214,8 @@ pub fn symmetry_planes(case: &Case) -> Vec<Plane> {
 pub fn planes_of(bodies: &[BodySpec], symmetry: &[SymmetryPlane]) -> Vec<Plane> {
     let mut lo = [f64::INFINITY; 3];
     let mut hi = [f64::NEG_INFINITY; 3];
-    for b in bodies {
+    // A prescribed set's region lies about particles of its body's.
+    for b in bodies.iter().filter(|b| b.part_of.is_none()) {
         let (l, h) = shapes::bounding_box(&b.shape);
         for k in 0..3 {
             lo[k] = lo[k].min(l[k]);
