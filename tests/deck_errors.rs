@@ -632,6 +632,14 @@ fn prescribed_set_keys() {
         30,
     );
     assert!(message.contains("2 components"), "{message}");
+    let (message, _) = deck_error(
+        &set(&format!(
+            "body = \"plate\"\n{region}\nvelocity = [0.0, 0.0, 1e6]"
+        )),
+        "prescribed[0].velocity",
+        30,
+    );
+    assert!(message.contains("beyond"), "{message}");
 
     let case = parse(&set(&format!("body = \"plate\"\n{region}")), "good.toml").unwrap();
     let clamp = &case.bodies[2];

@@ -1441,16 +1441,29 @@ impl Ctx<'_> {
                 }
             };
             let velocity = match &r.velocity {
-                Some(v) => self.vector(
-                    v,
-                    &format!("{prefix}.velocity"),
-                    dimension,
-                    if dimension == 2 {
+                Some(v) => {
+                    let key = format!("{prefix}.velocity");
+                    let example = if dimension == 2 {
                         "[0.0, 10.0]"
                     } else {
                         "[0.0, 0.0, 10.0]"
-                    },
-                )?,
+                    };
+                    let velocity = self.vector(v, &key, dimension, example)?;
+                    let speed = velocity.iter().fold(0.0_f64, |a, &c| a.hypot(c));
+                    if speed >= MAX_SPEED {
+                        return Err(self.fail(
+                            v.span(),
+                            key,
+                            format!(
+                                "the speed {} m/s is at or beyond {} m/s: the first time step would vanish",
+                                num(speed),
+                                num(MAX_SPEED)
+                            ),
+                            "give the set's velocity in m/s, e.g. 10 for a piston",
+                        ));
+                    }
+                    velocity
+                }
                 None => [0.0; 3],
             };
             out.push(BodySpec {
