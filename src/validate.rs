@@ -1134,13 +1134,16 @@ const STEEL_BAR_SOURCE: &str = "DynELA and Abaqus (Pantalé et al.), VALIDATION.
 /// wall (`[[wall]]`), quarter model, against the published finite-element results
 /// (DynELA and Abaqus): final length 26.52–26.56 mm within 2 %, impact-face diameter
 /// 11.15–11.22 mm within 10 % at R0/Δp = 8 and 5 % at 16 (`fine`; on the wall −4.0 and
-/// +3.9 %, on a symmetry plane −8.5 and −0.2 %).
+/// +3.9 %, on a symmetry plane −8.5 and −0.2 %), and the face's error no larger at 16 than at
+/// 8. Since 2026-12-05 that last check fails: −3.92 / +4.83 % at 8 / 16, and +12.0 % at 24 by
+/// hand (the viscosity and the adiabatic heating set the face; docs/open-problems.md).
 pub fn taylor(fine: bool) -> Result<Outcome> {
     let (length, face) = STEEL_BAR;
     let source = STEEL_BAR_SOURCE;
     let mut checks = Vec::new();
     let mut figures = Vec::new();
     let spacings: &[f64] = if fine { &[0.4e-3, 0.2e-3] } else { &[0.4e-3] };
+    let mut previous = None;
     for &dp in spacings {
         let mut case = example("taylor_bar")?;
         case.bodies[0].spacing = dp;
@@ -1172,6 +1175,13 @@ pub fn taylor(fine: bool) -> Result<Outcome> {
             source,
             ..Default::default()
         });
+        converges(
+            &mut checks,
+            &mut previous,
+            (d / face - 1.0).abs(),
+            "impact-face diameter error, finer against coarser",
+            &format!("R0/Δp = {ratio}"),
+        );
         let z: Vec<f64> = profile.iter().map(|r| r.0 * 1e3).collect();
         figures.push(Figure {
             name: format!("profile_r0_{ratio}"),
