@@ -1350,6 +1350,26 @@ impl Ctx<'_> {
         Err(self.fail(span, key, message, fit))
     }
 
+    /// The index of the body named `name` among `names`, or an error at `key` naming the
+    /// bodies (and the likeliest one meant).
+    fn body_index(&self, name: &S<String>, names: &[&str], key: &str) -> Result<usize> {
+        names
+            .iter()
+            .position(|b| *b == name.get_ref())
+            .ok_or_else(|| {
+                self.fail(
+                    name.span(),
+                    key,
+                    format!("unknown body `{}`", name.get_ref()),
+                    format!(
+                        "{}the bodies are {}",
+                        did_you_mean(name.get_ref(), names.iter().copied()),
+                        list(names)
+                    ),
+                )
+            })
+    }
+
     /// The `[[prescribed]]` sets: each a body of its own (see [`BodySpec::part_of`]), named
     /// uniquely, its region a shape of the deck's dimension, its velocity (zero by default: held
     /// fixed) in m/s.
@@ -1374,21 +1394,7 @@ impl Ctx<'_> {
                     &format!("add e.g. `body = \"{}\"`", names[0]),
                 ));
             };
-            let parent = names
-                .iter()
-                .position(|b| *b == body.get_ref())
-                .ok_or_else(|| {
-                    self.fail(
-                        body.span(),
-                        format!("{prefix}.body"),
-                        format!("unknown body `{}`", body.get_ref()),
-                        format!(
-                            "{}the bodies are {}",
-                            did_you_mean(body.get_ref(), names.iter().copied()),
-                            list(&names)
-                        ),
-                    )
-                })?;
+            let parent = self.body_index(body, &names, &format!("{prefix}.body"))?;
             let name = match &r.name {
                 Some(n) => {
                     let key = format!("{prefix}.name");
@@ -1513,21 +1519,7 @@ impl Ctx<'_> {
             }
             let mut idx = [0; 2];
             for (k, n) in pair.get_ref().iter().enumerate() {
-                idx[k] = names
-                    .iter()
-                    .position(|b| *b == n.get_ref())
-                    .ok_or_else(|| {
-                        self.fail(
-                            n.span(),
-                            format!("{prefix}.bodies[{k}]"),
-                            format!("unknown body `{}`", n.get_ref()),
-                            format!(
-                                "{}the bodies are {}",
-                                did_you_mean(n.get_ref(), names.iter().copied()),
-                                list(&names)
-                            ),
-                        )
-                    })?;
+                idx[k] = self.body_index(n, &names, &format!("{prefix}.bodies[{k}]"))?;
             }
             if idx[0] == idx[1] {
                 return Err(self.fail(
