@@ -297,16 +297,21 @@ fn check_dim<const D: usize>(case: &Case) -> Result<String> {
     let _ = writeln!(w, "bodies:");
     let mut warnings = Vec::new();
     let shapes = estimate_case_particles(case);
-    let count_of = |b: usize| p.body.iter().filter(|&&x| x as usize == b).count();
+    let mut counts = vec![0usize; case.bodies.len()];
+    for &x in &p.body {
+        if let Some(c) = counts.get_mut(x as usize) {
+            *c += 1;
+        }
+    }
     for (b, body) in case.bodies.iter().enumerate() {
-        let count = count_of(b);
+        let count = counts[b];
         let mat = &sim.model.materials[body.material];
         let mass = count as f64 * mat.rho0 * body.spacing.powi(D as i32);
         // A body's lattice holds its prescribed sets' particles too; a set has no shape of its
         // own to weigh against.
         let whole: usize = (0..case.bodies.len())
             .filter(|&s| s == b || case.bodies[s].part_of == Some(b))
-            .map(count_of)
+            .map(|s| counts[s])
             .sum();
         let excess = whole as f64 / shapes[b] - 1.0;
         let share = match body.part_of {

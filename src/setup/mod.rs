@@ -82,10 +82,11 @@ pub fn build<const D: usize>(case: &Case) -> Result<(Particles<D>, Model<D>)> {
             p.p[i] = mat.pressure(mat.rho0, 0.0);
             p.c[i] = mat.sound_speed(mat.rho0, 0.0);
         }
-        if p.len() == before && body.part_of.is_some() {
+        if let (true, Some(of)) = (p.len() == before, body.part_of) {
+            // Sets follow the deck's bodies, in the deck's order.
             let first = case.bodies.iter().position(|b| b.part_of.is_some());
             let k = b - first.unwrap_or(b);
-            let parent = &case.bodies[body.part_of.unwrap_or(b)];
+            let parent = &case.bodies[of];
             return Err(deck_error(
                 case,
                 body.location,
