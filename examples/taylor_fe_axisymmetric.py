@@ -108,13 +108,13 @@ def run(n_r, wall, chi, hourglass, history):
     vh[:, 1] = -V0
     force = np.zeros_like(x)
     t, steps, next_out = 0.0, 0, 5e-6
+    r, z, area, br, bz, rbar = geometry(x, conn)
     while t < T_END:
-        r, z, area, br, bz, rbar = geometry(x, conn)
         if (area <= 0).any():
             raise SystemExit(f"an element inverted at t = {t:.3e} s")
         diagonal = np.maximum(np.hypot(r[:, 2] - r[:, 0], z[:, 2] - z[:, 0]), np.hypot(r[:, 3] - r[:, 1], z[:, 3] - z[:, 1]))
         rho = mass / (area * rbar)
-        c = np.sqrt((RHO0 * C0**2 * rho / RHO0 + 4 * G / 3) / rho)
+        c = np.sqrt(C0**2 + 4 * G / (3 * rho))
         dt = min(0.6 * (area / diagonal / c).min(), T_END - t + 1e-15)
         vr, vz = vh[conn, 0], vh[conn, 1]
         d_rr = (br * vr).sum(1)
@@ -153,8 +153,8 @@ def run(n_r, wall, chi, hourglass, history):
         s = trial
         eps_p += d_eps
         w_p += d_eps * np.sqrt(1.5 * (s[:, :3] ** 2).sum(1) + 3 * s[:, 3] ** 2) / rho
-        length = np.sqrt(area)
-        q = np.where(div < 0, rho * length * (0.06 * c * -div + 1.2 * length * div**2), 0.0)
+        size = np.sqrt(area)
+        q = np.where(div < 0, rho * size * (0.06 * c * -div + 1.2 * size * div**2), 0.0)
         work = s[:, 0] * d_rr + s[:, 1] * d_zz + s[:, 2] * d_tt + 2 * s[:, 3] * d_rz
         e += dt * (work - (p + q) * div) / rho
         p = pressure(rho, e)
@@ -165,7 +165,7 @@ def run(n_r, wall, chi, hourglass, history):
         f_z = -(s[:, 3:4] * br + sig_zz[:, None] * bz) * volume
         # Flanagan-Belytschko viscous hourglass control.
         gamma = HOURGLASS - (HOURGLASS * x[conn, 0]).sum(1)[:, None] * br - (HOURGLASS * x[conn, 1]).sum(1)[:, None] * bz
-        k = 0.25 * hourglass * rho * c * np.sqrt(area) * rbar
+        k = 0.25 * hourglass * rho * c * size * rbar
         f_r -= (k * (gamma * vh[conn, 0]).sum(1))[:, None] * gamma
         f_z -= (k * (gamma * vh[conn, 1]).sum(1))[:, None] * gamma
         force[:, 0] = np.bincount(conn.ravel(), weights=f_r.ravel(), minlength=nodes)
@@ -175,6 +175,7 @@ def run(n_r, wall, chi, hourglass, history):
         if wall == "bonded":
             vh[bottom_row, 1] = 0.0
             x[bottom_row, 1] = 0.0
+            r, z, area, br, bz, rbar = geometry(x, conn)  # the next step's, with the row on the plane
         else:
             # A node the next step would carry through the wall lands on it.
             through = x[:, 1] + dt * vh[:, 1] < 0
