@@ -892,6 +892,16 @@ fn extent_y(p: &strike::particles::Particles<2>, b: u32) -> (f64, f64) {
         })
 }
 
+/// A 3D `case` run to its end time.
+fn run_to_end(case: &Case) -> Simulation<3> {
+    let mut sim = Simulation::<3>::new(case).unwrap();
+    let end = case.simulation.end_time;
+    while sim.state.time < end * (1.0 - 1e-12) {
+        sim.step(end - sim.state.time).unwrap();
+    }
+    sim
+}
+
 /// The density diffusion keeps a plastic flow's density noise from failing it
 /// (`examples/taylor_ofhc_anvil.toml`: Johnson & Cook's OFHC rod at 190 m/s onto a steel
 /// anvil, the library's spall at 1.3 GPa on, R0/Δp = 8, its first 8 µs). Without the
@@ -908,11 +918,7 @@ fn density_diffusion_keeps_the_copper_rods_foot_whole() {
             case.simulation.end_time = 8.0e-6;
             case.simulation.formulation = formulation;
             case.simulation.density_diffusion = delta;
-            let mut sim = Simulation::<3>::new(&case).unwrap();
-            let end = case.simulation.end_time;
-            while sim.state.time < end * (1.0 - 1e-12) {
-                sim.step(end - sim.state.time).unwrap();
-            }
+            let sim = run_to_end(&case);
             let p = &sim.particles;
             let failed = (0..p.n_real)
                 .filter(|&i| p.body[i] == 0 && p.damage[i] >= 1.0)
@@ -1278,11 +1284,7 @@ fn tuler_butcher_flyer_plate_spalls_as_the_independent_solution_does() {
 fn upset(formulation: strike::case::Formulation) -> (f64, f64) {
     let mut case = load("upsetting");
     case.simulation.formulation = formulation;
-    let mut sim = Simulation::<3>::new(&case).unwrap();
-    let end = case.simulation.end_time;
-    while sim.state.time < end * (1.0 - 1e-12) {
-        sim.step(end - sim.state.time).unwrap();
-    }
+    let sim = run_to_end(&case);
     let p = &sim.particles;
     let (h0, speed, r0, young) = (6.4e-3, 40.0, 3.2e-3, 206.9e9);
     let h = h0 - speed * sim.state.time;
@@ -1311,9 +1313,10 @@ fn upset(formulation: strike::case::Formulation) -> (f64, f64) {
 /// A cylinder upset between frictionless platens flows evenly: its core's plastic strain is
 /// the geometry's, ln(H0/H) less σ/E (0.974 at the end). CN-SPH holds it within 2 %: measured
 /// +0.9 % at R0/Δp = 8 (the deck) and −0.6 % at 16 (by hand, 14 minutes on 2 cores; not run
-/// here). Conventional SPH registers less than the particles move, its kernel sums' moment
-/// Σ V_j x_ji ⊗ ∇W drifting from the identity as the lattice flattens to 0.37 of its height
-/// and widens 1.65-fold: −6.2 / −3.9 % at R0/Δp = 8 / 16 (16 by hand), converging; held here
+/// here). Conventional SPH registers less than the particles move (read as its kernel sums'
+/// moment Σ V_j x_ji ⊗ ∇W drifting from the identity as the lattice flattens to 0.37 of its
+/// height and widens 1.65-fold, which CN-SPH's B removes; not measured): −6.2 / −3.9 % at
+/// R0/Δp = 8 / 16 (16 by hand), converging; held here
 /// within 8 %, so that a change that loses more of the flow is seen.
 #[test]
 fn upsetting_registers_the_plastic_strain_of_the_geometry() {
