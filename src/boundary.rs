@@ -2,8 +2,8 @@
 //!
 //! For a plane x_k = c, every particle (real, or a ghost of an earlier plane) within the
 //! largest support 2 h_max of the plane gets a ghost at its mirror image: x_k → 2c − x_k,
-//! v_k → −v_k, and the stress components with exactly one index k change sign (S_kl, l ≠ k);
-//! everything else (mass, density, energy, pressure, h, body) is copied. Mirroring the ghosts of
+//! v_k → −v_k, and the components with exactly one index k of the stress, the strain rate
+//! and the stretch b change sign (S_kl, l ≠ k); everything else (mass, density, energy, pressure, h, body) is copied. Mirroring the ghosts of
 //! earlier planes too fills the corners of a quarter model. Ghosts keep their body, so contact
 //! works across a symmetry plane.
 //!
@@ -339,7 +339,10 @@ fn mirror<const D: usize>(p: &mut Particles<D>, range: Range<usize>, plane: &Pla
         each(&mut field[r.clone()], |v| v[k] = -v[k]);
     }
     each(&mut p.s[r.clone()], |s| s.mirror(k));
-    each(&mut p.strain_rate[r], |s| s.mirror(k));
+    each(&mut p.strain_rate[r.clone()], |s| s.mirror(k));
+    // b's principal stretches are the source's, its axes mirrored (the tensor kernel's
+    // ellipsoid, `physics::asph`; h reads only the largest stretch).
+    each(&mut p.stretch[r], |s| s.mirror(k));
 }
 
 /// Mirror positions `x` in the plane (in parallel).

@@ -98,6 +98,9 @@ pub struct Simulation {
     pub smoothing_stretch: f64,
     /// δ of the density diffusion in the continuity equation (0: none; see `physics`).
     pub density_diffusion: f64,
+    /// Whether the kernel follows the material's stretch as an ellipsoid
+    /// (`smoothing_shape = "tensor"`, see `physics::asph`) rather than a sphere.
+    pub tensor_smoothing: bool,
     /// Impact speed for default contact stiffness; None: the largest relative speed of the bodies.
     pub impact_speed: Option<f64>,
 }
@@ -353,6 +356,11 @@ impl Case {
                 format!("{:?}", s.impact_speed),
             ),
         ];
+        // Only where it is not the default, so that the checkpoints of earlier versions,
+        // which have no such line, resume.
+        if s.tensor_smoothing {
+            out.push(("simulation.smoothing_shape".into(), "tensor".into()));
+        }
         for m in &self.materials {
             out.push((
                 format!("materials.{}", m.name),

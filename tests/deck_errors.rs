@@ -666,3 +666,38 @@ fn prescribed_set_keys() {
         ]
     );
 }
+
+/// The tensor smoothing length is a choice of two words, and is refused with CN-SPH and with a
+/// damage model (neither is built on the ellipsoid), each naming the key and its line.
+#[test]
+fn smoothing_shape_is_checked() {
+    let tensor = edit(
+        "end_time = 2.0e-7",
+        "end_time = 2.0e-7\nsmoothing_shape = \"tensor\"",
+    );
+    // The plate's library aluminium fails.
+    let (message, help) = deck_error(&tensor, "simulation.smoothing_shape", 4);
+    assert!(message.contains("damage model"), "{message}");
+    assert!(help.contains("type = \"none\""), "{help}");
+    let intact = tensor.replace("material = \"al_2024_t4\"", "material = \"al\"");
+    let case = parse(&intact, "good.toml").unwrap();
+    assert!(case.simulation.tensor_smoothing);
+    let case = parse(&intact.replace("\"tensor\"", "\"isotropic\""), "good.toml").unwrap();
+    assert!(!case.simulation.tensor_smoothing);
+    let (message, help) = deck_error(
+        &intact.replace(
+            "smoothing_shape",
+            "formulation = \"corrected\"\nsmoothing_shape",
+        ),
+        "simulation.smoothing_shape",
+        5,
+    );
+    assert!(message.contains("CN-SPH"), "{message}");
+    assert!(help.contains("conventional"), "{help}");
+    let (message, _) = deck_error(
+        &intact.replace("\"tensor\"", "\"ellipse\""),
+        "simulation.smoothing_shape",
+        4,
+    );
+    assert!(message.contains("ellipse"), "{message}");
+}

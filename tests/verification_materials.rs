@@ -1341,3 +1341,74 @@ fn upsetting_registers_the_plastic_strain_of_the_geometry() {
         "conventional: {eps} against {reference}"
     );
 }
+
+/// The plane-strain slab of `examples/taylor_slab_2d.toml` at `speed` and R0/Δp = `ratio`,
+/// as the deck sets it up or (`round`) with the defaults it changes (the round kernel, h's
+/// stretch up to 1.25, no artificial stress): its rim, the lowest layer's farthest particle
+/// plus Δp/2, from the plane (m).
+fn slab_rim(speed: f64, ratio: f64, round: bool) -> f64 {
+    let mut case = load("taylor_slab_2d");
+    let dp = 3.2e-3 / ratio;
+    case.bodies[0].spacing = dp;
+    case.bodies[0].velocity = [0.0, -speed, 0.0];
+    if round {
+        case.simulation.tensor_smoothing = false;
+        case.simulation.smoothing_stretch = 1.25;
+        case.materials[0].artificial_stress = None;
+    }
+    let mut sim = Simulation::<2>::new(&case).unwrap();
+    let lowest: std::collections::HashSet<u32> = (0..sim.particles.n_real)
+        .filter(|&i| sim.particles.x[i][1] < dp)
+        .map(|i| sim.particles.id[i])
+        .collect();
+    let end = case.simulation.end_time;
+    while sim.state.time < end * (1.0 - 1e-12) {
+        sim.step(end - sim.state.time).unwrap();
+    }
+    let p = &sim.particles;
+    let rim = (0..p.n_real)
+        .filter(|&i| lowest.contains(&p.id[i]))
+        .map(|i| p.x[i][0])
+        .fold(0.0, f64::max)
+        + 0.5 * dp;
+    println!(
+        "slab at {speed} m/s, R0/Δp = {ratio}, {}: rim {:.4} mm",
+        if round { "round kernel" } else { "the deck's" },
+        rim * 1e3
+    );
+    rim
+}
+
+/// The Taylor face in plane strain converges on the finite elements' with the tensor
+/// smoothing length (`physics::asph`) and the artificial stress, the slab deck's set-up.
+/// References: `python3 examples/taylor_fe_axisymmetric.py --plane-strain --chi 0 --v0 V`,
+/// half-faces 4.520 / 4.518 mm at 150 m/s and 8.230 / 8.252 mm at 287 m/s (8 / 16 elements
+/// across). Measured 2026-12-05 at R0/Δp = 8 / 16 / 32 (32 by hand): 4.407 / 4.503 / 4.554 mm
+/// (−2.5 / −0.3 / +0.8 %) at 150 m/s and 7.749 / 8.247 / 8.253 mm (−5.8 / −0.1 / +0.0 %) at
+/// 287 m/s. With the round kernel the rim moves away: 4.334 / 4.606 / 4.935 / 5.623 mm at 150
+/// m/s and R0/Δp = 8 / 16 / 32 / 64, 8.761 / 9.171 mm (+6.2 / +11.1 %) at 287 m/s and 16 / 32;
+/// the test runs the round kernel at 287 m/s and R0/Δp = 16 to show that it would fail it.
+#[test]
+fn taylor_slab_face_converges_with_the_tensor_smoothing_length() {
+    for (speed, fe) in [(150.0, 4.518e-3), (287.0, 8.252e-3)] {
+        let (coarse, fine) = (slab_rim(speed, 8.0, false), slab_rim(speed, 16.0, false));
+        let (e8, e16) = ((coarse / fe - 1.0).abs(), (fine / fe - 1.0).abs());
+        assert!(
+            e8 < 0.08,
+            "{speed} m/s, R0/Δp = 8: rim {coarse} against {fe}"
+        );
+        assert!(
+            e16 < 0.02,
+            "{speed} m/s, R0/Δp = 16: rim {fine} against {fe}"
+        );
+        assert!(
+            e16 < e8,
+            "{speed} m/s: the rim moves away, {coarse} then {fine} against {fe}"
+        );
+    }
+    let round = slab_rim(287.0, 16.0, true);
+    assert!(
+        round / 8.252e-3 - 1.0 > 0.04,
+        "round kernel at 287 m/s: {round}"
+    );
+}

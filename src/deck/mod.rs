@@ -772,6 +772,21 @@ impl Ctx<'_> {
         let fails = bodies
             .iter()
             .any(|b| !materials[b.material].damage.is_none());
+        if let (true, true, Some(shape)) = (
+            simulation.tensor_smoothing,
+            fails,
+            &sim.get_ref().smoothing_shape,
+        ) {
+            return Err(self.fail(
+                shape.span(),
+                "simulation.smoothing_shape",
+                "the tensor smoothing length is not built into the cut of a failed particle's \
+                 pairs, and a material here has a damage model"
+                    .to_string(),
+                "leave smoothing_shape out (\"isotropic\") in a deck with failure, or set \
+                 `damage = { type = \"none\" }` on its materials",
+            ));
+        }
         let ghosts = estimate_ghosts(&bodies, dimension, &planes, simulation.smoothing_ratio);
         let kind = (dimension, corrected, fails);
         self.check_memory(raw_bodies, &bodies, (&planes, ghosts), kind, memory)?;
@@ -997,6 +1012,27 @@ impl Ctx<'_> {
             )?,
             None => 1.25,
         };
+        let tensor_smoothing = match &s.smoothing_shape {
+            Some(k) => {
+                let shape = self.choice(
+                    k,
+                    "simulation.smoothing_shape",
+                    &["isotropic", "tensor"],
+                    "smoothing shape",
+                )?;
+                if shape == "tensor" && formulation == Formulation::Corrected {
+                    return Err(self.fail(
+                        k.span(),
+                        "simulation.smoothing_shape",
+                        "the tensor smoothing length is not built into CN-SPH's correction"
+                            .to_string(),
+                        "use it with formulation = \"conventional\", or leave                          smoothing_shape out (\"isotropic\")",
+                    ));
+                }
+                shape == "tensor"
+            }
+            None => false,
+        };
         let density_diffusion = match &s.density_diffusion {
             Some(d) => self.check(
                 d,
@@ -1034,6 +1070,7 @@ impl Ctx<'_> {
                 h_max_ratio,
                 smoothing_stretch,
                 density_diffusion,
+                tensor_smoothing,
                 impact_speed,
             },
         ))

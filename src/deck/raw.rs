@@ -178,6 +178,7 @@ pub struct Simulation {
     pub gravity: Option<S<Vec<f64>>>,
     pub smoothing_bounds: Option<S<Vec<f64>>>,
     pub smoothing_stretch: Option<S<f64>>,
+    pub smoothing_shape: Option<S<String>>,
     pub density_diffusion: Num,
     pub impact_speed: Num,
 }

@@ -18,6 +18,9 @@
 //!   Phys. Commun. 180, 861; [`diffusion_term`]), on the plain ∇W in both formulations, as the
 //!   viscosity is: it damps the density noise of heavy plastic flow, whose tensile tail a
 //!   failure model would read as tension (README, "Failure in heavy plastic flow")
+//! - tensor smoothing (`smoothing_shape = "tensor"`): ∇_i W_ij is the ellipsoidal kernel's of
+//!   [`asph`], h_ij the pair's h along x_ij (the viscosity's), and the step follows the
+//!   ellipsoid's shortest axis
 //!
 //! N_i are neighbours of the same body or of a `welded` body, and a wall's images of these
 //! while pressed against them ([`PairRule::Wall`], see `boundary`); C_i, neighbours of a body
@@ -57,6 +60,7 @@
 //! [`colour::states`]), with either contact law.
 
 pub mod artificial_stress;
+pub mod asph;
 pub mod correction;
 pub mod viscosity;
 
@@ -142,6 +146,10 @@ pub struct Model<const D: usize> {
     pub smoothing_stretch: f64,
     /// δ of the density diffusion (module doc; 0: none).
     pub density_diffusion: f64,
+    /// Whether the kernel follows the stretch as an ellipsoid ([`asph`]). Conventional SPH
+    /// without failure only, which the deck checks: the pass takes the round kernel in
+    /// CN-SPH, and a failed particle's cut (`cut_pair`) is the round kernel's.
+    pub tensor_smoothing: bool,
     /// The colour contact law's tables, where a pair of bodies uses it.
     pub colour: Option<ColourLaw>,
     /// Conventional SPH, or CN-SPH's corrected gradients.
@@ -380,6 +388,9 @@ pub struct Rates<const D: usize> {
     /// (σ_i/ρ_i²) B_i ∇W + (σ_j/ρ_j²) B_j ∇W. Apart from B, which only the particle itself
     /// reads (from the caller's array), so that a neighbour costs 9 numbers, not 18.
     sb: Vec<Matrix<D>>,
+    /// Each particle's kernel metric ([`asph`]; ghosts included and the padding's, current for
+    /// the particles the pass reads as `art`; empty with the round kernel).
+    metric: Vec<asph::Metric>,
     /// The failed particles that may sever each particle's pairs (empty where none has failed).
     cracks: CrackLists<D>,
 }
@@ -539,6 +550,8 @@ struct Pass<'a, const D: usize> {
     padding: u32,
     cracks: &'a CrackLists<D>,
     art: &'a [Tensor<D>],
+    /// The kernel metrics ([`asph`]; empty with the round kernel).
+    metric: &'a [asph::Metric],
     /// CN-SPH's B of every particle, ghosts included (empty: conventional SPH).
     corr: &'a [Tensor<D>],
     sb: &'a [Matrix<D>],
@@ -883,6 +896,19 @@ fn compute_rates_on<const D: usize, K: Kernel>(
     } else {
         out.art.clear();
     }
+    if model.tensor_smoothing {
+        let s = model.smoothing_stretch;
+        let metric_of = |i: usize| asph::Metric::of(&p.stretch[i], p.h[i], s);
+        fill_read(
+            &mut out.metric,
+            all,
+            (&read, n),
+            metric_of,
+            asph::Metric::NONE,
+        );
+    } else {
+        out.metric.clear();
+    }
     // Where a particle has failed, there is one window: its need's records go to `tail`, and
     // it holds none in the ring.
     let in_tail = if any_failed {
@@ -898,6 +924,7 @@ fn compute_rates_on<const D: usize, K: Kernel>(
         tail,
         art,
         sb,
+        metric,
         cracks,
     } = out;
     // The ring keeps its size from pass to pass while the need does not change much (what it
@@ -959,6 +986,7 @@ fn compute_rates_on<const D: usize, K: Kernel>(
             padding: all as u32,
             cracks,
             art,
+            metric,
             corr,
             sb,
             marks,
@@ -973,7 +1001,7 @@ fn compute_rates_on<const D: usize, K: Kernel>(
         // combination, on AVX2 or portable: switched off, the diffusion costs the pass nothing
         // (computed in every build it added 5 % of the instructions of a Taylor rod's step).
         macro_rules! run {
-            ($art:literal, $cn:literal, $diff:literal) => {
+            ($art:literal, $cn:literal, $diff:literal, $ell:literal) => {
                 particles
                     .slice_mut(evaluated.clone())
                     .par_iter_mut()
@@ -992,7 +1020,7 @@ fn compute_rates_on<const D: usize, K: Kernel>(
                         if wide {
                             // SAFETY: the CPU has AVX2 (asserted above).
                             unsafe {
-                                particle_rates_avx2::<D, K, $art, $cn, $diff>(
+                                particle_rates_avx2::<D, K, $art, $cn, $diff, $ell>(
                                     kernel,
                                     i,
                                     list,
@@ -1002,19 +1030,32 @@ fn compute_rates_on<const D: usize, K: Kernel>(
                             };
                             return;
                         }
-                        particle_rates::<D, K, $art, $cn, $diff>(kernel, i, list, &pass, (o, f))
+                        particle_rates::<D, K, $art, $cn, $diff, $ell>(
+                            kernel,
+                            i,
+                            list,
+                            &pass,
+                            (o, f),
+                        )
                     })
             };
         }
-        match (any_art, cn, model.density_diffusion > 0.0) {
-            (false, false, false) => run!(false, false, false),
-            (true, false, false) => run!(true, false, false),
-            (false, true, false) => run!(false, true, false),
-            (true, true, false) => run!(true, true, false),
-            (false, false, true) => run!(false, false, true),
-            (true, false, true) => run!(true, false, true),
-            (false, true, true) => run!(false, true, true),
-            (true, true, true) => run!(true, true, true),
+        // The ellipsoidal kernel only in conventional SPH (`crate::setup` refuses it with
+        // CN-SPH).
+        let ell = model.tensor_smoothing && !cn;
+        match (any_art, cn, model.density_diffusion > 0.0, ell) {
+            (false, false, false, false) => run!(false, false, false, false),
+            (true, false, false, false) => run!(true, false, false, false),
+            (false, true, false, _) => run!(false, true, false, false),
+            (true, true, false, _) => run!(true, true, false, false),
+            (false, false, true, false) => run!(false, false, true, false),
+            (true, false, true, false) => run!(true, false, true, false),
+            (false, true, true, _) => run!(false, true, true, false),
+            (true, true, true, _) => run!(true, true, true, false),
+            (false, false, false, true) => run!(false, false, false, true),
+            (true, false, false, true) => run!(true, false, false, true),
+            (false, false, true, true) => run!(false, false, true, true),
+            (true, false, true, true) => run!(true, false, true, true),
         }
     }
 }
@@ -1042,6 +1083,7 @@ fn particle_rates_avx2<
     const ART: bool,
     const CN: bool,
     const DIFF: bool,
+    const ELL: bool,
 >(
     kernel: K,
     i: usize,
@@ -1049,7 +1091,7 @@ fn particle_rates_avx2<
     pass: &Pass<D>,
     out: (&mut ParticleRates<D>, &mut Vector<D>),
 ) {
-    particle_rates::<D, K, ART, CN, DIFF>(kernel, i, neighbors, pass, out)
+    particle_rates::<D, K, ART, CN, DIFF, ELL>(kernel, i, neighbors, pass, out)
 }
 
 /// The conservation sums of one particle, one accumulator per lane (added up in lane order at
@@ -1100,7 +1142,14 @@ fn lane_max(a: &[f64; LANES]) -> f64 {
 /// the contact force into `contact_force` (the particle's entry of the array the simulation
 /// lends the pass, see [`Rates::contact_force`]).
 #[inline(always)]
-fn particle_rates<const D: usize, K: Kernel, const ART: bool, const CN: bool, const DIFF: bool>(
+fn particle_rates<
+    const D: usize,
+    K: Kernel,
+    const ART: bool,
+    const CN: bool,
+    const DIFF: bool,
+    const ELL: bool,
+>(
     kernel: K,
     i: usize,
     neighbors: &[u32],
@@ -1142,7 +1191,7 @@ fn particle_rates<const D: usize, K: Kernel, const ART: bool, const CN: bool, co
             if queued == BATCH {
                 for c in (0..BATCH).step_by(LANES) {
                     let (js, gs) = (&queue[c..c + LANES], &records[c..c + LANES]);
-                    conserve_chunk::<D, K, ART, CN, DIFF>(
+                    conserve_chunk::<D, K, ART, CN, DIFF, ELL>(
                         kernel,
                         (i, gi),
                         (js, gs),
@@ -1245,7 +1294,7 @@ fn particle_rates<const D: usize, K: Kernel, const ART: bool, const CN: bool, co
                 if share < 1.0 {
                     // Coming into touch: summed at once (rare), and cut as any pair is.
                     cut_queue!(j, gj, inside);
-                    wall_pair::<D, K, ART, CN, DIFF>(
+                    wall_pair::<D, K, ART, CN, DIFF, ELL>(
                         kernel,
                         (i, gi),
                         (j, gj),
@@ -1396,7 +1445,7 @@ fn particle_rates<const D: usize, K: Kernel, const ART: bool, const CN: bool, co
     records[queued..used].fill(pad);
     for c in (0..used).step_by(LANES) {
         let (js, gs) = (&queue[c..c + LANES], &records[c..c + LANES]);
-        conserve_chunk::<D, K, ART, CN, DIFF>(kernel, (i, gi), (js, gs), pass, &mut sums);
+        conserve_chunk::<D, K, ART, CN, DIFF, ELL>(kernel, (i, gi), (js, gs), pass, &mut sums);
     }
 
     if let Some(own) = colour.get(i) {
@@ -1414,7 +1463,9 @@ fn particle_rates<const D: usize, K: Kernel, const ART: bool, const CN: bool, co
     // a body flying at 7 km/s in one piece needs no shorter step, two meeting at 7 km/s do.
     let v_max = lane_max(&sums.v2_max).max(v2_contact).sqrt();
     let signal = ci + v_max + 0.6 * (alpha * ci + beta * lane_max(&sums.mu_max).max(mu_contact));
-    let mut dt = model.cfl * hi / signal;
+    // The ellipsoid's shortest half-axis bounds the step ([`asph`]).
+    let h_step = if ELL { pass.metric[i].h_min } else { hi };
+    let mut dt = model.cfl * h_step / signal;
     if k_contact > 0.0 {
         dt = dt.min(model.cfl * 2.0 * (mi / k_contact).sqrt());
     }
@@ -1453,7 +1504,14 @@ fn particle_rates<const D: usize, K: Kernel, const ART: bool, const CN: bool, co
 /// the support, which zeroes every term of the padding record), so that it vectorises.
 #[inline(always)]
 #[allow(clippy::needless_range_loop)] // index loops over lanes and axes read as the equations
-fn conserve_chunk<const D: usize, K: Kernel, const ART: bool, const CN: bool, const DIFF: bool>(
+fn conserve_chunk<
+    const D: usize,
+    K: Kernel,
+    const ART: bool,
+    const CN: bool,
+    const DIFF: bool,
+    const ELL: bool,
+>(
     kernel: K,
     (i, gi): (usize, &Gather<D>),
     (js, gs): (&[u32], &[&Gather<D>]),
@@ -1495,10 +1553,21 @@ fn conserve_chunk<const D: usize, K: Kernel, const ART: bool, const CN: bool, co
         let gj = g[l];
         let xij: [f64; D] = std::array::from_fn(|k| gi.x[k] - gj.x[k]);
         let r2 = dot(&xij, &xij);
-        let hij = 0.5 * (gi.h + gj.h);
         let r = r2.sqrt();
-        let gf = kernel.grad_factor::<D>(r, hij);
-        let grad: [f64; D] = std::array::from_fn(|k| xij[k] * gf);
+        // The pair's h (along its line for the ellipsoid, which the viscosity takes), the
+        // gradient's factor along x_ij (the density diffusion's ψ·∇W) and ∇_i W_ij; the
+        // ellipsoid's isotropic h for the artificial stress's W(Δp).
+        let (hij, gf, grad, h_iso) = if ELL {
+            let (mi, mj) = (&pass.metric[i].a, &pass.metric[js[l] as usize].a);
+            let (grad, h_line, h_iso) = asph::pair_gradient(kernel, mi, mj, &xij);
+            let along = if r2 > 0.0 { dot(&xij, &grad) / r2 } else { 0.0 };
+            (h_line, along, grad, h_iso)
+        } else {
+            let hij = 0.5 * (gi.h + gj.h);
+            let gf = kernel.grad_factor::<D>(r, hij);
+            let grad: [f64; D] = std::array::from_fn(|k| xij[k] * gf);
+            (hij, gf, grad, hij)
+        };
         let vij: [f64; D] = std::array::from_fn(|k| gi.v[k] - gj.v[k]);
         let near = r < 2.0 * hij;
         let v2 = if near { dot(&vij, &vij) } else { 0.0 };
@@ -1565,7 +1634,13 @@ fn conserve_chunk<const D: usize, K: Kernel, const ART: bool, const CN: bool, co
         if ART {
             let (ri, rj) = (&art[i], &art[js[l] as usize]);
             let dp = 0.5 * (gi.dp + gj.dp);
-            let f = kernel.w::<D>(r, hij) / kernel.w::<D>(dp, hij);
+            // f_ij = W_ij/W(Δp): for the ellipsoid, Δp in its own coordinates (the lattice
+            // it sees is the initial one), both at h = 1.
+            let f = if ELL {
+                kernel.w::<D>(r / hij, 1.0) / kernel.w::<D>(dp / h_iso, 1.0)
+            } else {
+                kernel.w::<D>(r, hij) / kernel.w::<D>(dp, hij)
+            };
             let fa = f.powi(artificial_stress::EXPONENT);
             for a in 0..D {
                 for b in 0..D {
@@ -1606,7 +1681,14 @@ fn conserve_chunk<const D: usize, K: Kernel, const ART: bool, const CN: bool, co
 /// first lane (rare: only while a face comes into touch with a wall).
 #[cold]
 #[inline(never)]
-fn wall_pair<const D: usize, K: Kernel, const ART: bool, const CN: bool, const DIFF: bool>(
+fn wall_pair<
+    const D: usize,
+    K: Kernel,
+    const ART: bool,
+    const CN: bool,
+    const DIFF: bool,
+    const ELL: bool,
+>(
     kernel: K,
     (i, gi): (usize, &Gather<D>),
     (j, gj): (u32, &Gather<D>),
@@ -1624,7 +1706,7 @@ fn wall_pair<const D: usize, K: Kernel, const ART: bool, const CN: bool, const D
     let mut gs = [pad; LANES];
     js[0] = j;
     gs[0] = &part;
-    conserve_chunk::<D, K, ART, CN, DIFF>(kernel, (i, gi), (&js, &gs), pass, sums);
+    conserve_chunk::<D, K, ART, CN, DIFF, ELL>(kernel, (i, gi), (&js, &gs), pass, sums);
 }
 
 /// CN-SPH's velocity gradient and density rate from the plain sum G_i = −Σ_j V_j v_ij ⊗ ∇_i W_ij

@@ -152,6 +152,7 @@ pub fn build<const D: usize>(case: &Case) -> Result<(Particles<D>, Model<D>)> {
         h_max_ratio: s.h_max_ratio,
         smoothing_stretch: s.smoothing_stretch,
         density_diffusion: s.density_diffusion,
+        tensor_smoothing: s.tensor_smoothing,
         colour: None,
         formulation: s.formulation,
         walls: planes
