@@ -3,9 +3,9 @@
 //! For a plane x_k = c, every particle (real, or a ghost of an earlier plane) within the
 //! largest support 2 h_max of the plane gets a ghost at its mirror image: x_k → 2c − x_k,
 //! v_k → −v_k, and the components with exactly one index k of the stress, the strain rate
-//! and the stretch b change sign (S_kl, l ≠ k); everything else (mass, density, energy, pressure, h, body) is copied. Mirroring the ghosts of
-//! earlier planes too fills the corners of a quarter model. Ghosts keep their body, so contact
-//! works across a symmetry plane.
+//! and the stretch b change sign (S_kl, l ≠ k); everything else (mass, density, energy,
+//! pressure, h, body) is copied. Mirroring the ghosts of earlier planes too fills the corners
+//! of a quarter model. Ghosts keep their body, so contact works across a symmetry plane.
 //!
 //! **Walls.** A frictionless rigid wall is a symmetry plane that only pushes. Its ghost of a
 //! particle of body b < N (N real bodies) belongs to body N + b, b's mirror image, which

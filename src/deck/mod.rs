@@ -1026,7 +1026,8 @@ impl Ctx<'_> {
                         "simulation.smoothing_shape",
                         "the tensor smoothing length is not built into CN-SPH's correction"
                             .to_string(),
-                        "use it with formulation = \"conventional\", or leave                          smoothing_shape out (\"isotropic\")",
+                        "use it with formulation = \"conventional\", or leave \
+                         smoothing_shape out (\"isotropic\")",
                     ));
                 }
                 shape == "tensor"

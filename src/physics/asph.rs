@@ -14,7 +14,7 @@
 //! G = b^(−½)/h: the deformed lattice looks to the kernel as the initial one did.
 //!
 //! Particle i's kernel is W_i(x) = det(G_i) w(|G_i x|), w the round kernel with h = 1; its
-//! gradient ∇W_i = det(G_i) A_i x w'(q)/q with A_i = G_iᵀ G_i = b_i⁻¹/h_i² and q = |G_i x|. A
+//! gradient ∇W_i = det(G_i) A_i x w'(q)/q with A_i = G_iᵀ G_i = b_i⁻¹/h_iso,i² and q = |G_i x|. A
 //! pair uses the mean metric A_ij = ½ (A_i + A_j), so that ∇_i W_ij = −∇_j W_ji and momentum
 //! is conserved: ∇_i W_ij = √(det A_ij) A_ij x_ij w'(q)/q with q² = x_ij·A_ij x_ij. With b = 1
 //! this is the round kernel at h_ij = ½ (h_i + h_j) up to the mean of 1/h² instead of h.

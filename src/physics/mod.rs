@@ -1040,8 +1040,8 @@ fn compute_rates_on<const D: usize, K: Kernel>(
                     })
             };
         }
-        // The ellipsoidal kernel only in conventional SPH (`crate::setup` refuses it with
-        // CN-SPH).
+        // The ellipsoidal kernel only in conventional SPH (the deck refuses it with CN-SPH; a
+        // case built otherwise gets the round kernel there).
         let ell = model.tensor_smoothing && !cn;
         match (any_art, cn, model.density_diffusion > 0.0, ell) {
             (false, false, false, false) => run!(false, false, false, false),
