@@ -1348,7 +1348,11 @@ fn upsetting_registers_the_plastic_strain_of_the_geometry() {
 /// plus Δp/2, from the plane (m).
 fn slab_rim(speed: f64, ratio: f64, round: bool) -> f64 {
     let mut case = load("taylor_slab_2d");
-    let dp = 3.2e-3 / ratio;
+    // The half thickness R0, from the deck's rectangle.
+    let strike::case::Shape::Box { min, max } = case.bodies[0].shape else {
+        panic!("the slab deck's body is not a rectangle");
+    };
+    let dp = (max[0] - min[0]) / ratio;
     case.bodies[0].spacing = dp;
     case.bodies[0].velocity = [0.0, -speed, 0.0];
     if round {

@@ -110,8 +110,10 @@ pub fn pair_gradient<const D: usize, K: Kernel>(
     (std::array::from_fn(|k| ax[k] * gf), h_line, h_iso)
 }
 
-/// The pair's kernel value W_ij = √(det A_ij) w(q) (for the tests' sums).
-pub fn pair_value<const D: usize, K: Kernel>(
+/// The pair's kernel value W_ij = √(det A_ij) w(q) (for the tests' sums; the pass takes
+/// only the gradient).
+#[cfg(test)]
+fn pair_value<const D: usize, K: Kernel>(
     kernel: K,
     ai: &[f64; 6],
     aj: &[f64; 6],
@@ -139,18 +141,17 @@ fn determinant<const D: usize>(a: &[f64; 6]) -> f64 {
     }
 }
 
-/// b as a full tensor from a deformation gradient (for the tests).
-#[cfg(test)]
-fn stretch_of<const D: usize>(f: &crate::particles::Tensor<D>) -> Sym<f64, D> {
-    Sym::from_full(&(f * f.transpose()))
-}
-
 #[cfg(test)]
 mod tests {
     use super::*;
     use crate::kernel::CubicSpline;
     use crate::particles::Tensor;
     use approx::assert_relative_eq;
+
+    /// b = F Fᵀ of a deformation gradient F.
+    fn stretch_of<const D: usize>(f: &Tensor<D>) -> Sym<f64, D> {
+        Sym::from_full(&(f * f.transpose()))
+    }
 
     /// With b = 1 the pair gradient is the round kernel's at h_ij (equal h: exactly h).
     #[test]
