@@ -772,21 +772,6 @@ impl Ctx<'_> {
         let fails = bodies
             .iter()
             .any(|b| !materials[b.material].damage.is_none());
-        if let (true, true, Some(shape)) = (
-            simulation.tensor_smoothing,
-            fails,
-            &sim.get_ref().smoothing_shape,
-        ) {
-            return Err(self.fail(
-                shape.span(),
-                "simulation.smoothing_shape",
-                "the tensor smoothing length is not built into the cut of a failed particle's \
-                 pairs, and a material here has a damage model"
-                    .to_string(),
-                "leave smoothing_shape out (\"isotropic\") in a deck with failure, or set \
-                 `damage = { type = \"none\" }` on its materials",
-            ));
-        }
         let ghosts = estimate_ghosts(&bodies, dimension, &planes, simulation.smoothing_ratio);
         let kind = (dimension, corrected, fails);
         self.check_memory(raw_bodies, &bodies, (&planes, ghosts), kind, memory)?;

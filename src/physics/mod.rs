@@ -147,8 +147,7 @@ pub struct Model<const D: usize> {
     /// δ of the density diffusion (module doc; 0: none).
     pub density_diffusion: f64,
     /// Whether the kernel follows the stretch as an ellipsoid ([`asph`]). Conventional SPH
-    /// without failure only, which the deck checks: the pass takes the round kernel in
-    /// CN-SPH, and a failed particle's cut (`cut_pair`) is the round kernel's.
+    /// only, which the deck checks: the pass takes the round kernel in CN-SPH.
     pub tensor_smoothing: bool,
     /// The colour contact law's tables, where a pair of bodies uses it.
     pub colour: Option<ColourLaw>,
@@ -1228,7 +1227,7 @@ fn particle_rates<
     // The queued pairs, and the severed pairs with a neighbour below `upto`.
     macro_rules! cut_before {
         ($upto:expr) => {
-            cut_in_order::<D, K, CN>(
+            cut_in_order::<D, K, CN, ELL>(
                 kernel,
                 i,
                 (&cut_queue[..cut_queued], severed, &mut met, $upto),
@@ -1557,17 +1556,8 @@ fn conserve_chunk<
         // The pair's h (along its line for the ellipsoid, which the viscosity takes), the
         // gradient's factor along x_ij (the density diffusion's ψ·∇W) and ∇_i W_ij; the
         // ellipsoid's isotropic h for the artificial stress's W(Δp).
-        let (hij, gf, grad, h_iso) = if ELL {
-            let (mi, mj) = (&pass.metric[i].a, &pass.metric[js[l] as usize].a);
-            let (grad, h_line, h_iso) = asph::pair_gradient(kernel, mi, mj, &xij);
-            let along = if r2 > 0.0 { dot(&xij, &grad) / r2 } else { 0.0 };
-            (h_line, along, grad, h_iso)
-        } else {
-            let hij = 0.5 * (gi.h + gj.h);
-            let gf = kernel.grad_factor::<D>(r, hij);
-            let grad: [f64; D] = std::array::from_fn(|k| xij[k] * gf);
-            (hij, gf, grad, hij)
-        };
+        let (hij, gf, grad, h_iso) =
+            pair_kernel::<D, K, ELL>(kernel, pass, (i, gi), (js[l] as usize, gj), &xij, r2);
         let vij: [f64; D] = std::array::from_fn(|k| gi.v[k] - gj.v[k]);
         let near = r < 2.0 * hij;
         let v2 = if near { dot(&vij, &vij) } else { 0.0 };
@@ -1636,12 +1626,7 @@ fn conserve_chunk<
             let dp = 0.5 * (gi.dp + gj.dp);
             // f_ij = W_ij/W(Δp): for the ellipsoid, Δp in its own coordinates (the lattice
             // it sees is the initial one), both at h = 1.
-            let f = if ELL {
-                kernel.w::<D>(r / hij, 1.0) / kernel.w::<D>(dp / h_iso, 1.0)
-            } else {
-                kernel.w::<D>(r, hij) / kernel.w::<D>(dp, hij)
-            };
-            let fa = f.powi(artificial_stress::EXPONENT);
+            let fa = stress_factor::<D, K, ELL>(kernel, r, dp, (hij, h_iso));
             for a in 0..D {
                 for b in 0..D {
                     let t = (ri[(a, b)] + rj[(a, b)]) * fa * grad[b];
@@ -1673,6 +1658,50 @@ fn conserve_chunk<
         s.de[l] -= 0.5 * mj * veg;
         s.de_lag[l] -= 0.5 * mj * ueg;
     }
+}
+
+/// The pair's kernel: (h_ij, gf, ∇_i W_ij, h_iso). The round kernel's ∇_i W_ij = x_ij gf at
+/// h_ij = ½ (h_i + h_j), h_iso = h_ij; the ellipsoid's ([`asph::pair_gradient`]) with h_ij its h
+/// along the pair's line (which the viscosity takes), gf = x_ij·∇_i W_ij/r² (the factor along
+/// x_ij, which the density diffusion's ψ·∇W takes) and h_iso the mean metric's isotropic h.
+#[inline(always)]
+fn pair_kernel<const D: usize, K: Kernel, const ELL: bool>(
+    kernel: K,
+    pass: &Pass<D>,
+    (i, gi): (usize, &Gather<D>),
+    (j, gj): (usize, &Gather<D>),
+    xij: &[f64; D],
+    r2: f64,
+) -> (f64, f64, [f64; D], f64) {
+    if ELL {
+        let (mi, mj) = (&pass.metric[i].a, &pass.metric[j].a);
+        let (grad, h_line, h_iso) = asph::pair_gradient(kernel, mi, mj, xij);
+        let along = if r2 > 0.0 { dot(xij, &grad) / r2 } else { 0.0 };
+        (h_line, along, grad, h_iso)
+    } else {
+        let hij = 0.5 * (gi.h + gj.h);
+        let gf = kernel.grad_factor::<D>(r2.sqrt(), hij);
+        let grad: [f64; D] = std::array::from_fn(|k| xij[k] * gf);
+        (hij, gf, grad, hij)
+    }
+}
+
+/// The artificial stress's (W_ij/W(Δp))^n (Monaghan 2000) at distance r, (h_ij, h_iso) from
+/// [`pair_kernel`]: for the ellipsoid both in its own coordinates (the lattice it sees is the
+/// initial one), at h = 1.
+#[inline(always)]
+fn stress_factor<const D: usize, K: Kernel, const ELL: bool>(
+    kernel: K,
+    r: f64,
+    dp: f64,
+    (hij, h_iso): (f64, f64),
+) -> f64 {
+    let f = if ELL {
+        kernel.w::<D>(r / hij, 1.0) / kernel.w::<D>(dp / h_iso, 1.0)
+    } else {
+        kernel.w::<D>(r, hij) / kernel.w::<D>(dp, hij)
+    };
+    f.powi(artificial_stress::EXPONENT)
 }
 
 /// A wall's image pair counted in part, `share` of it ([`crate::boundary::wall_share`]): every
@@ -1721,7 +1750,7 @@ fn finish_corrected<const D: usize>(b: &Tensor<D>, rho: f64, g: &Tensor<D>) -> (
 /// its severed pairs from the `met`-th on whose neighbour is below `upto`, merged in the
 /// neighbours' order ([`cut_pair`]); `met` moves past the severed pairs cut.
 #[inline(never)]
-fn cut_in_order<const D: usize, K: Kernel, const CN: bool>(
+fn cut_in_order<const D: usize, K: Kernel, const CN: bool, const ELL: bool>(
     kernel: K,
     i: usize,
     (members, severed, met, upto): (&[u32], &[(u32, bool)], &mut usize, u32),
@@ -1748,8 +1777,18 @@ fn cut_in_order<const D: usize, K: Kernel, const CN: bool>(
             (member as usize, CutKind::Member)
         };
         let xij: [f64; D] = std::array::from_fn(|k| xi[k] - gather[j].x[k]);
-        cut_pair::<D, K, CN>(kernel, (i, j), &xij, kind, pass, cuts);
+        cut_pair::<D, K, CN, ELL>(kernel, (i, j), &xij, kind, pass, cuts);
     }
+}
+
+/// A pair's kernel as [`cut_pair`] takes it ([`pair_kernel`]; a wall's image's share in gf and
+/// ∇W): distance r, gf, ∇_i W_ij, h_ij and h_iso.
+struct PairTerms<const D: usize> {
+    r: f64,
+    gf: f64,
+    grad: [f64; D],
+    hij: f64,
+    h_iso: f64,
 }
 
 /// Why a pair is cut ([`cut_pair`]): a failed member, or a failed particle between two intact
@@ -2270,7 +2309,7 @@ fn joined<const D: usize>(model: &Model<D>, a: u32, b: u32) -> bool {
 /// together. Adds to `cuts` what the pair takes out of i's sums; `kind`: why it is cut.
 #[inline(never)]
 #[allow(clippy::needless_range_loop)] // index loops over axes read as the equations
-fn cut_pair<const D: usize, K: Kernel, const CN: bool>(
+fn cut_pair<const D: usize, K: Kernel, const CN: bool, const ELL: bool>(
     kernel: K,
     (i, j): (usize, usize),
     xij: &[f64; D],
@@ -2285,15 +2324,26 @@ fn cut_pair<const D: usize, K: Kernel, const CN: bool>(
         CutKind::Closed => false,
         CutKind::Open => true,
     };
-    // The kernel's gradient factor, shared by the two terms, and by a wall's image pair
-    // only its share (every term is linear in it; see `wall_pair`).
-    let r = dot(xij, xij).sqrt();
+    // The pair's kernel ([`pair_kernel`]), shared by the two terms, and by a wall's image
+    // pair only its share (every term is linear in it; see `wall_pair`).
+    let r2 = dot(xij, xij);
+    let r = r2.sqrt();
     let share = match pass.model.pairs.rule(gi.body, gj.body) {
         PairRule::Wall => wall_share(pass.model, gi, gj),
         _ => 1.0,
     };
-    let gf = share * kernel.grad_factor::<D>(r, 0.5 * (gi.h + gj.h));
-    let (cut, share) = tension_cut::<D, K, CN>(kernel, (i, j), xij, (r, gf), pass);
+    let (hij, gf, grad, h_iso) = pair_kernel::<D, K, ELL>(kernel, pass, (i, gi), (j, gj), xij, r2);
+    let gf = share * gf;
+    // The round kernel's x_ij gf as the pass's, the share in gf.
+    let grad: [f64; D] = std::array::from_fn(|k| if ELL { share * grad[k] } else { xij[k] * gf });
+    let terms = PairTerms {
+        r,
+        gf,
+        grad,
+        hij,
+        h_iso,
+    };
+    let (cut, share) = tension_cut::<D, K, CN, ELL>(kernel, (i, j), xij, &terms, pass);
     let mj = gj.m;
     for a in 0..D {
         cuts.acc[a] -= cut[a] * mj;
@@ -2301,9 +2351,8 @@ fn cut_pair<const D: usize, K: Kernel, const CN: bool>(
         cuts.de_lag += mj * (f64::from(gi.u[a]) - f64::from(gj.u[a])) * share[a];
     }
     if open {
-        let (drho, grad_v) = kinematic_terms::<D, CN>((i, j), xij, gf, pass);
+        let (drho, grad_v) = kinematic_terms::<D, CN>((i, j), &grad, pass);
         cuts.drho -= drho;
-        let hij = 0.5 * (gi.h + gj.h);
         cuts.diff -= diffusion_term(hij, 0.5 * (gi.c + gj.c), gj.rho - gi.rho, gf, gj.vol);
         for a in 0..D {
             for b in 0..D {
@@ -2338,20 +2387,18 @@ fn diffusion_term(hij: f64, cij: f64, drho_ji: f64, gf: f64, vol_j: f64) -> f64 
 /// The pair's terms in i's continuity and velocity gradient, as the pass adds them:
 /// (m_j w_ij · ∇̃_i W_ij, −V_j w_ij ⊗ ∇̃_i W_ij) with w = v + dv the velocity at the step's
 /// middle, ∇̃ = B_i ∇ in CN-SPH, whose continuity term is V_j w_ij · ∇̃_i W_ij (times ρ_i with
-/// the rest of the sum). `gf`: the kernel's gradient factor, ∇W = x_ij gf.
+/// the rest of the sum). `grad`: the plain ∇_i W_ij ([`pair_kernel`]).
 fn kinematic_terms<const D: usize, const CN: bool>(
     (i, j): (usize, usize),
-    xij: &[f64; D],
-    gf: f64,
+    grad: &[f64; D],
     pass: &Pass<D>,
 ) -> (f64, [[f64; D]; D]) {
     let (gi, gj) = (&pass.gather[i], &pass.gather[j]);
-    let grad: [f64; D] = std::array::from_fn(|k| xij[k] * gf);
     let vij: [f64; D] =
         std::array::from_fn(|k| gi.v[k] - gj.v[k] + (f64::from(gi.dv[k]) - f64::from(gj.dv[k])));
     // CN-SPH: on the plain ∇W, as the pass's sums (B_i comes at the end, `finish_corrected`);
     // its density rate follows from L.
-    let drho = if CN { 0.0 } else { gj.m * dot(&vij, &grad) };
+    let drho = if CN { 0.0 } else { gj.m * dot(&vij, grad) };
     let grad_v = std::array::from_fn(|a| std::array::from_fn(|b| -(vij[a] * gj.vol) * grad[b]));
     (drho, grad_v)
 }
@@ -2361,13 +2408,12 @@ fn kinematic_terms<const D: usize, const CN: bool>(
 /// the artificial stress's term — the pair force less this keeps only the compressive
 /// pressures. A failed particle carries no
 /// tension and no deviator (`material::damage`), so its own part is zero. Returns the cut and
-/// i's share of its work, split as the pair's (see `conserve_chunk`). (r, gf): the pair's
-/// distance and the kernel's gradient factor, ∇W = x_ij gf.
-fn tension_cut<const D: usize, K: Kernel, const CN: bool>(
+/// i's share of its work, split as the pair's (see `conserve_chunk`). `k`: the pair's kernel.
+fn tension_cut<const D: usize, K: Kernel, const CN: bool, const ELL: bool>(
     kernel: K,
     (i, j): (usize, usize),
     xij: &[f64; D],
-    (r, gf): (f64, f64),
+    k: &PairTerms<D>,
     pass: &Pass<D>,
 ) -> ([f64; D], [f64; D]) {
     let (gi, gj) = (&pass.gather[i], &pass.gather[j]);
@@ -2401,24 +2447,31 @@ fn tension_cut<const D: usize, K: Kernel, const CN: bool>(
     // pushed rubble off the intact particles beside it, which held their tension and failed in
     // turn: a failed zone grew through the whole plate of `examples/ogive_plate.toml`.)
     let art = (!pass.art.is_empty()).then(|| {
-        let hij = 0.5 * (gi.h + gj.h);
         let dp = 0.5 * (gi.dp + gj.dp);
-        let f = kernel.w::<D>(r, hij) / kernel.w::<D>(dp, hij);
         (
-            f.powi(artificial_stress::EXPONENT),
+            stress_factor::<D, K, ELL>(kernel, k.r, dp, (k.hij, k.h_iso)),
             &pass.art[i],
             &pass.art[j],
         )
     });
+    // c ∇W along axis b: the round kernel's in the order its terms have always been summed
+    // ((c x_b) gf), the ellipsoid's from its gradient.
+    let along = |c: f64, b: usize| {
+        if ELL {
+            c * k.grad[b]
+        } else {
+            c * xij[b] * k.gf
+        }
+    };
     let mut cut = [0.0; D];
     let mut share = [0.0; D];
     for a in 0..D {
         let (mut t, mut rest, mut own) = (0.0, 0.0, 0.0);
         for b in 0..D {
-            t += (ti[a][b] + tj[a][b]) * xij[b] * gf;
-            own += (ti[a][b] - 0.5 * plain_i[a][b] + 0.5 * plain_j[a][b]) * xij[b] * gf;
+            t += along(ti[a][b] + tj[a][b], b);
+            own += along(ti[a][b] - 0.5 * plain_i[a][b] + 0.5 * plain_j[a][b], b);
             if let Some((fa, ri, rj)) = art {
-                let r = (ri[(a, b)] + rj[(a, b)]) * fa * xij[b] * gf;
+                let r = along((ri[(a, b)] + rj[(a, b)]) * fa, b);
                 t += r;
                 rest += r;
             }
@@ -3252,6 +3305,64 @@ shape = { type = "rectangle", min = [0.0, 0.0], max = [8.0e-3, 6.0e-3] }
             );
         }
         assert_ne!(before.particles[corner].de, after.particles[corner].de);
+    }
+
+    /// A failed particle's pairs are cut on the ellipsoid of the tensor smoothing length
+    /// ([`asph`]): in a block under uniform tension (−100 MPa), at rest, on a perturbed lattice, with every particle
+    /// stretched by the same sheared b, a failed particle inside it (carrying nothing itself)
+    /// feels no force, since each of its pairs passes on only compression; and the forces
+    /// stay antisymmetric, Σ m a = 0. Cut on the round kernel while the pass sums on the
+    /// ellipsoid, the failed particle's force would be the difference of the two gradients.
+    #[test]
+    fn a_failed_particles_pairs_are_cut_on_the_ellipsoid() {
+        let (mut p, mut model) = elastic_block();
+        model.tensor_smoothing = true;
+        model.smoothing_stretch = 2.0;
+        let b = Sym::from_full(&Tensor::<2>::new(1.8, 0.4, 0.4, 0.7));
+        let mut rnd = crate::validate::blocks::uniform(3);
+        for i in 0..p.n_real {
+            p.stretch[i] = b;
+            p.p[i] = -1e8;
+            // Off the lattice, so that the pairs' forces do not cancel by symmetry.
+            for k in 0..2 {
+                p.x[i][k] += 2e-4 * rnd();
+            }
+        }
+        let failed = (0..p.n_real)
+            .min_by(|&i, &j| {
+                let d = |k: usize| (p.x[k] - Vector::<2>::new(4.5e-3, 3.5e-3)).norm();
+                d(i).total_cmp(&d(j))
+            })
+            .unwrap();
+        p.damage[failed] = 1.0;
+        p.p[failed] = 0.0;
+        let mut nl = NeighborList::default();
+        nl.build(&p.x, &p.h, p.n_real, 0.0);
+        let rates = all_rates(&p, &nl, &model, &[]);
+        // What one side's tension alone gives the failed particle: Σ_j m_j |p_j|/ρ_j² |∇W|.
+        let h = p.h[failed];
+        let scale: f64 = nl
+            .list(failed)
+            .map(|j| j as usize)
+            .map(|j| {
+                let r = (p.x[failed] - p.x[j]).norm();
+                p.m[j] * 1e8 / (p.rho[j] * p.rho[j])
+                    * (r * CubicSpline.grad_factor::<2>(r, h)).abs()
+            })
+            .sum();
+        assert!(scale > 0.0);
+        let a = rates.particles[failed].acc.norm();
+        assert!(a < 1e-12 * scale, "failed particle: |a| = {a} of {scale}");
+        let intact = (0..p.n_real).find(|&i| i != failed).unwrap();
+        assert!(rates.particles[intact].acc.norm() > 1e-3 * scale);
+        let momentum: Vector<2> = (0..p.n_real).map(|i| p.m[i] * rates.particles[i].acc).sum();
+        let total: f64 = (0..p.n_real)
+            .map(|i| p.m[i] * rates.particles[i].acc.norm())
+            .sum();
+        assert!(
+            momentum.norm() < 1e-12 * total,
+            "Σ m a = {momentum:?} of {total}"
+        );
     }
 
     /// Bodies closing on each other through the contact bound the time step by their relative
