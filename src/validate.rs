@@ -1130,17 +1130,22 @@ pub struct TaylorRun {
 const STEEL_BAR: (f64, f64) = (26.54e-3, 11.185e-3);
 const STEEL_BAR_SOURCE: &str = "DynELA and Abaqus (Pantalé et al.), VALIDATION.md §F";
 
+/// The steel bar's impact-face diameter (m) in `examples/taylor_fe_axisymmetric.py` on a wall
+/// it may leave, as strike's: 11.343 / 11.377 / 11.390 mm at 0.4 / 0.2 / 0.1 mm elements, the
+/// continuum's converged face, which a converging run approaches (the published 11.15–11.22
+/// mm are 0.4 mm elements held on the plane; the same script reads 11.262 / 11.286 / 11.286 mm
+/// so).
+const STEEL_FACE_ON_THE_WALL: f64 = 11.390e-3;
+
 /// The Taylor bar (`examples/taylor_bar.toml`): 42CrMo4 at 287 m/s onto a frictionless rigid
-/// wall (`[[wall]]`), quarter model, against the published finite-element results
-/// (DynELA and Abaqus): final length 26.52–26.56 mm within 2 %, impact-face diameter
-/// 11.15–11.22 mm within 10 % at R0/Δp = 8 and 5 % at 16 (`fine`; on the wall −4.0 and
-/// +3.9 %, on a symmetry plane −8.5 and −0.2 %), and the face's error no larger at 16 than at
-/// 8. Since 2026-12-05 that last check fails: −3.92 / +4.83 % at 8 / 16, and +12.0 % at 24 by
-/// hand. The published face is the converged one of this continuum: the same deck in
-/// `examples/taylor_fe_axisymmetric.py` reads 11.262 / 11.286 / 11.286 mm at 0.4 / 0.2 / 0.1 mm
-/// elements held on the plane as the published model's, and 11.343 / 11.377 / 11.390 mm on a
-/// wall it may leave, as strike's; strike's rim registers less plastic strain than its own hoop
-/// stretch (docs/open-problems.md).
+/// wall (`[[wall]]`), quarter model, with the tensor smoothing length and the artificial
+/// stress, against the published finite-element results (DynELA and Abaqus): final length
+/// 26.52–26.56 mm within 2 % and impact-face diameter 11.15–11.22 mm within 5 %, at R0/Δp = 8
+/// and (`fine`) 16, the face's error against the converged face on the same wall
+/// ([`STEEL_FACE_ON_THE_WALL`]) no larger at 16 than at 8. Measured 2026-12-05: 26.763 mm and
+/// 11.256 mm at 8, 26.560 mm and 11.295 mm at 12. With the round kernel the face moved away
+/// with refinement, 10.747 / 11.725 / 12.531 mm at 8 / 16 / 24 (−3.9 / +4.8 / +12.0 % of the
+/// published): the foot's lattice folds (README, "Large plastic flow"; docs/open-problems.md).
 pub fn taylor(fine: bool) -> Result<Outcome> {
     let (length, face) = STEEL_BAR;
     let source = STEEL_BAR_SOURCE;
@@ -1175,15 +1180,15 @@ pub fn taylor(fine: bool) -> Result<Outcome> {
             measured: d,
             reference: face,
             unit: "m",
-            tolerance: if ratio >= 16.0 { 0.05 } else { 0.10 },
+            tolerance: 0.05,
             source,
             ..Default::default()
         });
         converges(
             &mut checks,
             &mut previous,
-            (d / face - 1.0).abs(),
-            "impact-face diameter error, finer against coarser",
+            (d / STEEL_FACE_ON_THE_WALL - 1.0).abs(),
+            "impact-face diameter error against the converged face on the same wall, finer against coarser",
             &format!("R0/Δp = {ratio}"),
         );
         let z: Vec<f64> = profile.iter().map(|r| r.0 * 1e3).collect();
@@ -1419,6 +1424,18 @@ pub fn taylor_variants(deck: &str, spacing: f64) -> Result<Vec<(&'static str, Ca
     ])
 }
 
+/// The round kernel of the decks' defaults, without the artificial stress: CN-SPH's
+/// correction is not built on the tensor smoothing length (the deck refuses the two together),
+/// and the walls were measured so (2026-12-04), before `examples/taylor_bar.toml` took the
+/// ellipsoid and the artificial stress (2026-12-05).
+fn round_kernel(case: &mut Case) {
+    case.simulation.tensor_smoothing = false;
+    case.simulation.smoothing_stretch = 1.25;
+    for m in &mut case.materials {
+        m.artificial_stress = None;
+    }
+}
+
 /// The walls and the copper bar (VALIDATION.md §F, issue 13 items 5 and 6): the steel bar
 /// (`examples/taylor_bar.toml`) and the copper one with linear hardening
 /// (`examples/taylor_copper.toml`, 227 m/s; the benchmark of Kamoulakos 1990, Zhu & Cescotto
@@ -1481,6 +1498,7 @@ pub fn taylor_walls(fine: bool) -> Result<Outcome> {
             let mut on_wall = None;
             for (k, (label, mut case)) in variants.into_iter().enumerate() {
                 case.simulation.formulation = Formulation::Corrected;
+                round_kernel(&mut case);
                 let r = taylor_run(&case)?;
                 let s = format!("{deck}, {label}, CN-SPH, R0/Δp = {ratio}");
                 let Some((l0, d0)) = on_wall else {
