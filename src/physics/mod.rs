@@ -1556,8 +1556,17 @@ fn conserve_chunk<
         // The pair's h (along its line for the ellipsoid, which the viscosity takes), the
         // gradient's factor along x_ij (the density diffusion's ψ·∇W) and ∇_i W_ij; the
         // ellipsoid's isotropic h for the artificial stress's W(Δp).
-        let (hij, gf, grad, h_iso) =
-            pair_kernel::<D, K, ELL>(kernel, pass, (i, gi), (js[l] as usize, gj), &xij, r2);
+        // The round kernel spelled out here, on this lane's r: through `pair_kernel`, which
+        // takes the root of r² again, LLVM left every build of the lanes scalar
+        // (`tests/vectorised.rs`; 2026-12-05). The same numbers.
+        let (hij, gf, grad, h_iso) = if ELL {
+            pair_kernel::<D, K, ELL>(kernel, pass, (i, gi), (js[l] as usize, gj), &xij, r2)
+        } else {
+            let hij = 0.5 * (gi.h + gj.h);
+            let gf = kernel.grad_factor::<D>(r, hij);
+            let grad: [f64; D] = std::array::from_fn(|k| xij[k] * gf);
+            (hij, gf, grad, hij)
+        };
         let vij: [f64; D] = std::array::from_fn(|k| gi.v[k] - gj.v[k]);
         let near = r < 2.0 * hij;
         let v2 = if near { dot(&vij, &vij) } else { 0.0 };
