@@ -439,11 +439,13 @@ fn steinberg_guinan_flows_at_its_shocked_state() {
 /// (`boundary::wall_share`, 2026-12-04): by hand that day, the steel twin's face −2.77 % of
 /// the wall's at 16 (−3.19 % at 8), the steel fixed block's −1.16 %, the copper twin's −0.71 %
 /// (README, Not yet). The steel bar's own face fails too since 2026-12-05, when its error at
-/// 16 came to be held no larger than at 8 (−3.92 / +4.83 %; +12.0 % at 24 by hand). About four
-/// hours on 2 cores:
+/// 16 came to be held no larger than at 8: with the round kernel −3.92 / +4.83 % of the
+/// published face (+12.0 % at 24 by hand); with the tensor smoothing length the deck takes
+/// since that evening, −1.18 / +1.22 % of the converged face on the same wall (11.256 / 11.529
+/// mm, by hand through `validate::taylor_run`). About five hours on 2 cores:
 /// `cargo test --release --test verification_materials -- --ignored`.
 #[test]
-#[ignore = "long (the validation command, about four hours on 2 cores); fails since the wall meets a particle from touching of 2026-12-04 (by hand: the steel twin's face −2.77 % of the wall's at R0/Δp = 16), and on the steel face's error growing from R0/Δp = 8 to 16 (−3.92 / +4.83 %)"]
+#[ignore = "long (the validation command, about five hours on 2 cores); fails since the wall meets a particle from touching of 2026-12-04 (by hand: the steel twin's face −2.77 % of the wall's at R0/Δp = 16), and on the steel face's error growing from R0/Δp = 8 to 16 (tensor smoothing length: −1.18 / +1.22 % of the converged face on the same wall)"]
 fn taylor_bars_converge_and_their_walls_agree() {
     validated(strike::validate::taylor(true));
     validated(strike::validate::taylor_walls(true));
