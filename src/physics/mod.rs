@@ -1555,8 +1555,8 @@ fn conserve_chunk<
         let r = r2.sqrt();
         // The pair's h (along its line for the ellipsoid, which the viscosity takes), the
         // gradient's factor along x_ij (the density diffusion's ψ·∇W) and ∇_i W_ij; the
-        // ellipsoid's isotropic h for the artificial stress's W(Δp).
-        // The round kernel spelled out here, on this lane's r: through `pair_kernel`, which
+        // ellipsoid's isotropic h for the artificial stress's W(Δp) ([`pair_kernel`]). The
+        // round kernel is spelled out here, on this lane's r: through `pair_kernel`, which
         // takes the root of r² again, LLVM left every build of the lanes scalar
         // (`tests/vectorised.rs`; 2026-12-05). The same numbers.
         let (hij, gf, grad, h_iso) = if ELL {
@@ -3317,11 +3317,11 @@ shape = { type = "rectangle", min = [0.0, 0.0], max = [8.0e-3, 6.0e-3] }
     }
 
     /// A failed particle's pairs are cut on the ellipsoid of the tensor smoothing length
-    /// ([`asph`]): in a block under uniform tension (−100 MPa), at rest, on a perturbed lattice, with every particle
-    /// stretched by the same sheared b, a failed particle inside it (carrying nothing itself)
-    /// feels no force, since each of its pairs passes on only compression; and the forces
-    /// stay antisymmetric, Σ m a = 0. Cut on the round kernel while the pass sums on the
-    /// ellipsoid, the failed particle's force would be the difference of the two gradients.
+    /// ([`asph`]): in a block under uniform tension (−100 MPa), at rest, on a perturbed
+    /// lattice, with every particle stretched by the same sheared b, a failed particle inside
+    /// it (carrying nothing itself) feels no force, since each of its pairs passes on only
+    /// compression; and the forces stay antisymmetric, Σ m a = 0. Cut on the round kernel
+    /// while the pass sums on the ellipsoid, it feels 5 % of one side's tension force.
     #[test]
     fn a_failed_particles_pairs_are_cut_on_the_ellipsoid() {
         let (mut p, mut model) = elastic_block();
