@@ -1005,16 +1005,6 @@ impl Ctx<'_> {
                     &["isotropic", "tensor"],
                     "smoothing shape",
                 )?;
-                if shape == "tensor" && formulation == Formulation::Corrected {
-                    return Err(self.fail(
-                        k.span(),
-                        "simulation.smoothing_shape",
-                        "the tensor smoothing length is not built into CN-SPH's correction"
-                            .to_string(),
-                        "use it with formulation = \"conventional\", or leave \
-                         smoothing_shape out (\"isotropic\")",
-                    ));
-                }
                 shape == "tensor"
             }
             None => false,

@@ -22,6 +22,7 @@
 //! Below [`LAMBDA_MIN`] the correction is not applied: DESIGN.md's 0.2 for "isolated" would
 //! drop the corners, whose A_i inverts well.
 
+use super::asph::{self, Metric};
 use crate::kernel::Kernel;
 use crate::neighbors::NeighborList;
 use crate::particles::{Particles, Tensor};
@@ -153,6 +154,10 @@ pub fn same_body<const D: usize>(p: &Particles<D>) -> impl Fn(usize, usize) -> C
 /// uncorrected gradient.
 ///
 /// ∇_i W_ij is radial, so A_i = −Σ_j V_j (1/r dW/dr) x_ij ⊗ x_ij is symmetric: six sums in 3D.
+///
+/// With the tensor smoothing length (`metric`: every particle's, ghosts included; empty for
+/// the round kernel) ∇_i W_ij is the ellipsoid's, A_ij x_ij times a scalar with A_ij the
+/// pair's mean metric ([`asph`]), and A_i is not symmetric: see [`ellipsoid_correction`].
 pub fn corrections<const D: usize, K: Kernel>(
     kernel: K,
     p: &Particles<D>,
@@ -160,6 +165,7 @@ pub fn corrections<const D: usize, K: Kernel>(
     counts: impl Fn(usize, usize) -> Counts + Sync,
     owned: &Range<usize>,
     out: &mut Vec<Correction<D>>,
+    metric: &[Metric],
 ) -> usize {
     corrections_on(
         kernel,
@@ -168,7 +174,7 @@ pub fn corrections<const D: usize, K: Kernel>(
         counts,
         owned,
         out,
-        crate::physics::wide_lanes(),
+        (crate::physics::wide_lanes(), metric),
     )
 }
 
@@ -180,7 +186,7 @@ pub(crate) fn corrections_on<const D: usize, K: Kernel>(
     counts: impl Fn(usize, usize) -> Counts + Sync,
     owned: &Range<usize>,
     out: &mut Vec<Correction<D>>,
-    wide: bool,
+    (wide, metric): (bool, &[Metric]),
 ) -> usize {
     assert!(
         !wide || crate::physics::wide_lanes(),
@@ -205,6 +211,9 @@ pub(crate) fn corrections_on<const D: usize, K: Kernel>(
         // check of the pair's bodies.
         let mixed = nl.mixed.get(i).copied().unwrap_or(true);
         nl.with_list(i, |list| {
+            if !metric.is_empty() {
+                return ellipsoid_correction(kernel, i, list, (points, metric), mixed, &counts);
+            }
             #[cfg(target_arch = "x86_64")]
             if wide {
                 // SAFETY: the CPU has AVX2 (asserted above).
@@ -264,6 +273,119 @@ fn correction<const D: usize, K: Kernel>(
         lambda_min,
         fallback: inverse.is_none(),
         support,
+    }
+}
+
+/// Particle i's correction with the tensor smoothing length: A_i = Σ_j V_j ∇_i W_ij ⊗ x_ji
+/// with the ellipsoid's ∇_i W_ij = g_ij A_ij x_ij ([`asph::pair_gradient`]), the moments
+/// counted as [`moments`] counts them, and B_i = A_i⁻¹, so that the corrected gradient is
+/// exact for a linear field as with the round kernel (the rate pass's L_i = −(Σ_j V_j v_ij ⊗
+/// ∇_i W_ij) B_iᵀ reads L for v = L x). A_ij differs from pair to pair, so A_i is not
+/// symmetric: nine sums, a general inverse, and for the surface indicator the smallest real
+/// part of its eigenvalues ([`min_real_eigenvalue`]). On a lattice deformed by F, with every
+/// metric from b = F Fᵀ, A_i = F⁻ᵀ A_i⁰ Fᵀ: similar to the undeformed lattice's moment, so its
+/// eigenvalues, and the indicator, are the undeformed lattice's (`physics::tests`). Scalar,
+/// one neighbour at a time: the ellipsoid's pair gradient already costs the rate pass its
+/// lanes. The entries in the support are marked for the rate pass as [`moments`] marks them.
+fn ellipsoid_correction<const D: usize, K: Kernel>(
+    kernel: K,
+    i: usize,
+    list: &[u32],
+    (points, metric): (Points<D>, &[Metric]),
+    mixed: bool,
+    counts: &impl Fn(usize, usize) -> Counts,
+) -> Correction<D> {
+    let pi = &points.at[i];
+    let mut body = Tensor::<D>::zeros();
+    let mut facing = Tensor::<D>::zeros();
+    let mut mask: Support = [0; 2];
+    for (k, &j) in list.iter().enumerate() {
+        let inside = in_support::<D, 1>(pi, &[j], points)[0];
+        if !inside {
+            continue;
+        }
+        if let Some(word) = mask.get_mut(k / 64) {
+            *word |= 1 << (k % 64);
+        }
+        let (share, sum) = match if mixed {
+            counts(i, j as usize)
+        } else {
+            Counts::Body
+        } {
+            Counts::Body => (1.0, &mut body),
+            Counts::Share(share) => (share, &mut body),
+            Counts::Facing => (1.0, &mut facing),
+            Counts::Not => continue,
+        };
+        let (xij, _, _) = separations::<D, 1>(pi, &[j], points);
+        let xij: [f64; D] = std::array::from_fn(|a| xij[a][0]);
+        let (grad, _, _) = asph::pair_gradient(kernel, &metric[i].a, &metric[j as usize].a, &xij);
+        let v = share * points.vol[j as usize];
+        for a in 0..D {
+            for b in 0..D {
+                // x_ji = −x_ij.
+                sum[(a, b)] -= v * grad[a] * xij[b];
+            }
+        }
+    }
+    let lambda_min = min_real_eigenvalue(&body);
+    let (a, lambda_b) = if facing != Tensor::<D>::zeros() {
+        let full = body + facing;
+        (full, min_real_eigenvalue(&full))
+    } else {
+        (body, lambda_min)
+    };
+    let inverse = (lambda_b >= LAMBDA_MIN)
+        .then(|| a.try_inverse())
+        .flatten()
+        .filter(|b| b.iter().all(|x| x.is_finite()));
+    Correction {
+        b: inverse.unwrap_or_else(Tensor::<D>::identity),
+        lambda_min,
+        fallback: inverse.is_none(),
+        support: (!mixed && list.len() <= SUPPORT_ENTRIES).then_some(mask),
+    }
+}
+
+/// The smallest real part of the eigenvalues of a real D × D matrix, D ≤ 3, in closed form:
+/// the quadratic's roots in 2D; in 3D the characteristic cubic λ³ − I₁λ² + I₂λ − I₃ = 0,
+/// depressed to y³ + py + q = 0 (λ = y + I₁/3), by the trigonometric solution where its three
+/// roots are real and by Cardano's where one is, the complex pair's real part −y₁/2
+/// (Abramowitz & Stegun 3.8.2). For a symmetric matrix it is [`min_eigenvalue`].
+pub fn min_real_eigenvalue<const D: usize>(m: &Tensor<D>) -> f64 {
+    match D {
+        1 => m[(0, 0)],
+        2 => {
+            let half = 0.5 * m.trace();
+            let disc = half * half - (m[(0, 0)] * m[(1, 1)] - m[(0, 1)] * m[(1, 0)]);
+            if disc >= 0.0 {
+                half - disc.sqrt()
+            } else {
+                half
+            }
+        }
+        _ => {
+            let i1 = m.trace();
+            let minor = |a: usize, b: usize| m[(a, a)] * m[(b, b)] - m[(a, b)] * m[(b, a)];
+            let i2 = minor(0, 1) + minor(0, 2) + minor(1, 2);
+            let i3 = m[(0, 0)] * (m[(1, 1)] * m[(2, 2)] - m[(1, 2)] * m[(2, 1)])
+                - m[(0, 1)] * (m[(1, 0)] * m[(2, 2)] - m[(1, 2)] * m[(2, 0)])
+                + m[(0, 2)] * (m[(1, 0)] * m[(2, 1)] - m[(1, 1)] * m[(2, 0)]);
+            let shift = i1 / 3.0;
+            let p = i2 - i1 * i1 / 3.0;
+            let q = -2.0 * i1 * i1 * i1 / 27.0 + i1 * i2 / 3.0 - i3;
+            let disc = 0.25 * q * q + p * p * p / 27.0;
+            if p < 0.0 && disc <= 0.0 {
+                let r = 2.0 * (-p / 3.0).sqrt();
+                let cos = (3.0 * q / (p * r)).clamp(-1.0, 1.0);
+                let phi = cos.acos() / 3.0;
+                shift + r * (phi + 2.0 * std::f64::consts::PI / 3.0).cos()
+            } else {
+                let root = disc.max(0.0).sqrt();
+                let y1 = (-0.5 * q + root).cbrt() + (-0.5 * q - root).cbrt();
+                shift + y1.min(-0.5 * y1)
+            }
+        }
     }
 }
 
@@ -896,7 +1018,7 @@ mod tests {
         nl.build(&p.x, &p.h, p.n_real, 1.0);
         let all = 0..p.n_real;
         let (mut wide, mut portable) = (Vec::new(), Vec::new());
-        corrections(CubicSpline, &p, &nl, same_body(&p), &all, &mut wide);
+        corrections(CubicSpline, &p, &nl, same_body(&p), &all, &mut wide, &[]);
         corrections_on(
             CubicSpline,
             &p,
@@ -904,7 +1026,7 @@ mod tests {
             same_body(&p),
             &all,
             &mut portable,
-            false,
+            (false, &[]),
         );
         assert_eq!(wide, portable);
         for i in [6 + 6 * 12 + 6 * 144, 0] {
@@ -926,6 +1048,33 @@ mod tests {
         }
     }
 
+    /// The smallest real part of a general matrix's eigenvalues: a symmetric matrix's smallest
+    /// eigenvalue; unchanged by a similarity S M S⁻¹ (three real roots); with a complex pair
+    /// (a rotation's), the pair's real part where it is the smaller; in 2D likewise.
+    #[test]
+    fn smallest_real_eigenvalue_of_a_general_matrix() {
+        let m = Tensor::<3>::new(2.0, 0.3, -0.4, 0.3, 1.1, 0.2, -0.4, 0.2, 0.7);
+        let s = Tensor::<3>::new(1.5, 0.3, 0.0, 0.1, 0.7, 0.2, 0.0, -0.4, 1.2);
+        let lambda = min_eigenvalue(&m);
+        assert!((min_real_eigenvalue(&m) - lambda).abs() < 1e-14);
+        let similar = s * m * s.try_inverse().unwrap();
+        assert!((min_real_eigenvalue(&similar) - lambda).abs() < 1e-12);
+        // Real eigenvalue 2 and the pair 0.5 ± 0.8i, in a skewed basis.
+        let rotation = Tensor::<3>::new(0.5, -0.8, 0.0, 0.8, 0.5, 0.0, 0.0, 0.0, 2.0);
+        let skewed = s * rotation * s.try_inverse().unwrap();
+        assert!((min_real_eigenvalue(&skewed) - 0.5).abs() < 1e-12);
+        let flipped = Tensor::<3>::new(2.5, -0.8, 0.0, 0.8, 2.5, 0.0, 0.0, 0.0, -1.0);
+        assert!(
+            (min_real_eigenvalue(&(s * flipped * s.try_inverse().unwrap())) + 1.0).abs() < 1e-12
+        );
+        let m2 = Tensor::<2>::new(1.0, 0.4, 0.4, 0.3);
+        assert!((min_real_eigenvalue(&m2) - min_eigenvalue(&m2)).abs() < 1e-15);
+        assert_eq!(
+            min_real_eigenvalue(&Tensor::<2>::new(0.5, -0.8, 0.8, 0.5)),
+            0.5
+        );
+    }
+
     /// The surface indicator and the fallback: about 1 inside, lower at a face and a corner,
     /// and a lone particle or a line of particles (in 2D) keeps the uncorrected gradient.
     #[test]
@@ -934,7 +1083,15 @@ mod tests {
         let mut nl = NeighborList::default();
         nl.build(&p.x, &p.h, p.n_real, 0.0);
         let mut c = Vec::new();
-        corrections(CubicSpline, &p, &nl, same_body(&p), &(0..p.n_real), &mut c);
+        corrections(
+            CubicSpline,
+            &p,
+            &nl,
+            same_body(&p),
+            &(0..p.n_real),
+            &mut c,
+            &[],
+        );
         let (inside, face, corner) = (c[4 + 4 * 9], c[4], c[0]);
         assert!(
             (inside.lambda_min - 1.0).abs() < 0.05,
@@ -975,6 +1132,7 @@ mod tests {
             same_body(&line),
             &(0..line.n_real),
             &mut c,
+            &[],
         );
         assert_eq!(fallbacks, 6);
         assert!(c.iter().all(|c| c.b == Tensor::<2>::identity()));

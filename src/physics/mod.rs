@@ -269,7 +269,17 @@ pub fn corrections<const D: usize, K: Kernel>(
             PairRule::Contact(_) => Counts::Not,
         }
     };
-    correction::corrections(kernel, p, nl, counts, owned, out)
+    // The tensor smoothing length's metrics, as the rate pass takes them ([`asph`]).
+    let metric: Vec<asph::Metric> = if model.tensor_smoothing {
+        let s = model.smoothing_stretch;
+        (0..p.len())
+            .into_par_iter()
+            .map(|i| asph::Metric::of(&p.stretch[i], p.h[i], s))
+            .collect()
+    } else {
+        Vec::new()
+    };
+    correction::corrections(kernel, p, nl, counts, owned, out, &metric)
 }
 
 /// Rates of change and per-particle diagnostics of one real particle, from one pass.
@@ -1039,22 +1049,28 @@ fn compute_rates_on<const D: usize, K: Kernel>(
                     })
             };
         }
-        // The ellipsoidal kernel only in conventional SPH (the deck refuses it with CN-SPH; a
-        // case built otherwise gets the round kernel there).
-        let ell = model.tensor_smoothing && !cn;
-        match (any_art, cn, model.density_diffusion > 0.0, ell) {
+        match (
+            any_art,
+            cn,
+            model.density_diffusion > 0.0,
+            model.tensor_smoothing,
+        ) {
             (false, false, false, false) => run!(false, false, false, false),
             (true, false, false, false) => run!(true, false, false, false),
-            (false, true, false, _) => run!(false, true, false, false),
-            (true, true, false, _) => run!(true, true, false, false),
+            (false, true, false, false) => run!(false, true, false, false),
+            (true, true, false, false) => run!(true, true, false, false),
             (false, false, true, false) => run!(false, false, true, false),
             (true, false, true, false) => run!(true, false, true, false),
-            (false, true, true, _) => run!(false, true, true, false),
-            (true, true, true, _) => run!(true, true, true, false),
+            (false, true, true, false) => run!(false, true, true, false),
+            (true, true, true, false) => run!(true, true, true, false),
             (false, false, false, true) => run!(false, false, false, true),
             (true, false, false, true) => run!(true, false, false, true),
             (false, false, true, true) => run!(false, false, true, true),
+            (false, true, false, true) => run!(false, true, false, true),
+            (true, true, false, true) => run!(true, true, false, true),
+            (false, true, true, true) => run!(false, true, true, true),
             (true, false, true, true) => run!(true, false, true, true),
+            (true, true, true, true) => run!(true, true, true, true),
         }
     }
 }
@@ -2854,8 +2870,8 @@ mod tests {
             }
         };
         let (mut cw, mut cp) = (Vec::new(), Vec::new());
-        correction::corrections_on(CubicSpline, &p, &nl, joined, &all, &mut cw, true);
-        correction::corrections_on(CubicSpline, &p, &nl, joined, &all, &mut cp, false);
+        correction::corrections_on(CubicSpline, &p, &nl, joined, &all, &mut cw, (true, &[]));
+        correction::corrections_on(CubicSpline, &p, &nl, joined, &all, &mut cp, (false, &[]));
         assert_eq!(cw, cp);
         assert!(cw
             .iter()
@@ -2872,7 +2888,7 @@ mod tests {
         }
         nl.classify(&p.body, false);
         let mut marked = Vec::new();
-        correction::corrections_on(CubicSpline, &p, &nl, joined, &all, &mut marked, true);
+        correction::corrections_on(CubicSpline, &p, &nl, joined, &all, &mut marked, (true, &[]));
         assert_eq!(marked.iter().map(|c| c.b).collect::<Vec<_>>(), b);
         let n_marked = marked.iter().filter(|c| c.support.is_some()).count();
         assert!(n_marked > p.n_real / 2, "{n_marked} of {}", p.n_real);
@@ -3064,6 +3080,92 @@ shape = { type = "rectangle", min = [0.0, 0.0], max = [8.0e-3, 6.0e-3] }
         );
     }
 
+    /// CN-SPH with the tensor smoothing length: on a block deformed by F (a sheared stretch,
+    /// every particle's b = F Fᵀ) and perturbed, a linear velocity field v = G x gives L = G to
+    /// round-off at every particle, faces and corners included, with B inverting the
+    /// ellipsoid's moments; B from the round kernel's moments with the ellipsoid's gradients
+    /// in the pass misses by a third. The surface indicator sees the deformed block as the
+    /// undeformed one: its smallest real eigenvalue of A_i is the same within the perturbation's
+    /// reach (A_i = F⁻ᵀ A_i⁰ Fᵀ on the unperturbed lattice), inside and on the faces.
+    #[test]
+    fn corrected_pass_with_the_ellipsoid_reproduces_a_linear_velocity_field() {
+        let (mut p, mut model) = elastic_block();
+        let (undeformed, _) = elastic_block();
+        model.tensor_smoothing = true;
+        model.smoothing_stretch = 2.0;
+        let f = Tensor::<2>::new(1.5, 0.3, 0.1, 0.7);
+        let b = Sym::from_full(&(f * f.transpose()));
+        let g = Tensor::<2>::new(30.0, -12.0, 7.0, -21.0);
+        let mut rnd = crate::validate::blocks::uniform(5);
+        let longest = crate::integrate::largest_stretch(&b.full());
+        for i in 0..p.n_real {
+            p.x[i] = f * p.x[i];
+            p.stretch[i] = b;
+            // The ellipsoid's longest half-axis over 2 is h (`integrate::smoothing_length`).
+            p.h[i] *= longest;
+            for k in 0..2 {
+                p.x[i][k] += 1e-4 * rnd();
+            }
+            p.v[i] = g * p.x[i];
+            p.p[i] = 1e6 * p.x[i][0];
+        }
+        let mut nl = NeighborList::default();
+        nl.build(&p.x, &p.h, p.n_real, 0.0);
+        let mut c = Vec::new();
+        assert_eq!(
+            corrections(CubicSpline, &p, &nl, &model, &(0..p.n_real), &mut c),
+            0
+        );
+        let bs: Vec<Tensor<2>> = c.iter().map(|c| c.b).collect();
+        let mut round = Vec::new();
+        let same = correction::same_body(&p);
+        correction::corrections(CubicSpline, &p, &nl, same, &(0..p.n_real), &mut round, &[]);
+        let round: Vec<Tensor<2>> = round.iter().map(|c| c.b).collect();
+        let worst = |r: &Rates<2>| {
+            r.particles
+                .as_slice()
+                .iter()
+                .map(|x| (x.grad_v - g).norm() / g.norm())
+                .fold(0.0, f64::max)
+        };
+        let (ell, off) = (
+            all_rates(&p, &nl, &model, &bs),
+            all_rates(&p, &nl, &model, &round),
+        );
+        assert!(worst(&ell) < 1e-12, "ellipsoid: {}", worst(&ell));
+        assert!(worst(&off) > 0.3, "round moments: {}", worst(&off));
+        let force: Vector<2> = (0..p.n_real).map(|i| ell.particles[i].acc * p.m[i]).sum();
+        let scale: f64 = (0..p.n_real)
+            .map(|i| (ell.particles[i].acc * p.m[i]).norm())
+            .sum();
+        assert!(
+            force.norm() < 1e-12 * scale,
+            "net force {force:?} of {scale}"
+        );
+        // The indicator against the undeformed block's, particle by particle.
+        let mut nl0 = NeighborList::default();
+        nl0.build(&undeformed.x, &undeformed.h, undeformed.n_real, 0.0);
+        let mut c0 = Vec::new();
+        let model0 = elastic_block().1;
+        corrections(
+            CubicSpline,
+            &undeformed,
+            &nl0,
+            &model0,
+            &(0..p.n_real),
+            &mut c0,
+        );
+        for i in 0..p.n_real {
+            let (l, l0) = (c[i].lambda_min, c0[i].lambda_min);
+            assert!((l - l0).abs() < 0.1, "particle {i}: {l} against {l0}");
+            assert_eq!(
+                l < correction::LAMBDA_SURFACE,
+                l0 < correction::LAMBDA_SURFACE,
+                "particle {i}: {l} against {l0}"
+            );
+        }
+    }
+
     /// CN-SPH beside a wall: B counts a wall's images only while they are pressed on the
     /// particle, as the rate pass does (`pressed`), and from when the face touches the wall, the
     /// share the rate pass counts (`boundary::wall_share`). A block on the wall y = 0 in a linear
@@ -3122,6 +3224,7 @@ shape = { type = "rectangle", min = [0.0, 0.0], max = [8.0e-3, 6.0e-3] }
                 },
                 &all,
                 &mut alone,
+                &[],
             );
             correction::corrections(
                 CubicSpline,
@@ -3130,6 +3233,7 @@ shape = { type = "rectangle", min = [0.0, 0.0], max = [8.0e-3, 6.0e-3] }
                 |_, _| correction::Counts::Body,
                 &all,
                 &mut mirrored,
+                &[],
             );
             for &i in &face {
                 assert_ne!(alone[i].b, mirrored[i].b, "particle {i}");

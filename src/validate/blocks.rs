@@ -341,7 +341,15 @@ pub fn linear_field_errors<const D: usize>(n: usize, jitter: f64, which: &[usize
     nl.build(&p.x, &p.h, p.n_real, 0.0);
     let mut c = Vec::new();
     // A 9² or 7³ block has no particle whose matrix needs the fallback.
-    corrections(CubicSpline, &p, &nl, same_body(&p), &(0..p.n_real), &mut c);
+    corrections(
+        CubicSpline,
+        &p,
+        &nl,
+        same_body(&p),
+        &(0..p.n_real),
+        &mut c,
+        &[],
+    );
     let shepard = shepard(CubicSpline, &p, &nl, same_body(&p));
     let mut e = [0.0_f64; 4];
     for &i in which {
@@ -494,7 +502,7 @@ type = "contact"
                 _ => Counts::Not,
             }
         };
-        correction::corrections(CubicSpline, &p, &nl, counts, &all, &mut c);
+        correction::corrections(CubicSpline, &p, &nl, counts, &all, &mut c, &[]);
     }
     let rates = rates_of(&p, &nl, &model, &c);
     let traction = pressure * dp * dp;
