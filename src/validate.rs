@@ -1425,10 +1425,10 @@ pub fn taylor_variants(deck: &str, spacing: f64) -> Result<Vec<(&'static str, Ca
     ])
 }
 
-/// The round kernel of the decks' defaults, without the artificial stress: CN-SPH's
-/// correction is not built on the tensor smoothing length (the deck refuses the two together),
-/// and the walls were measured so (2026-12-04), before `examples/taylor_bar.toml` took the
-/// ellipsoid and the artificial stress (2026-12-05).
+/// The round kernel of the decks' defaults, without the artificial stress: the walls were
+/// measured so in CN-SPH (2026-12-04), before `examples/taylor_bar.toml` took the ellipsoid
+/// and the artificial stress (2026-12-05) and before CN-SPH took the ellipsoid (2026-12-06);
+/// with it they have not been measured.
 fn round_kernel(case: &mut Case) {
     case.simulation.tensor_smoothing = false;
     case.simulation.smoothing_stretch = 1.25;
