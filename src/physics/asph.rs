@@ -68,6 +68,37 @@ impl Metric {
     }
 }
 
+/// The pair's mean metric A_ij = ½ (A_i + A_j), A_ij x_ij and q² = x_ij·A_ij x_ij.
+#[inline(always)]
+fn quadratic<const D: usize>(
+    ai: &[f64; 6],
+    aj: &[f64; 6],
+    xij: &[f64; D],
+) -> ([f64; 6], [f64; D], f64) {
+    let a: [f64; 6] = std::array::from_fn(|k| 0.5 * (ai[k] + aj[k]));
+    let ax: [f64; D] = std::array::from_fn(|r| {
+        let mut s = 0.0;
+        for (c, x) in xij.iter().enumerate() {
+            s += a[sym(r.min(c), r.max(c))] * x;
+        }
+        s
+    });
+    let mut q2 = 0.0;
+    for k in 0..D {
+        q2 += xij[k] * ax[k];
+    }
+    (a, ax, q2)
+}
+
+/// Whether the pair lies inside its ellipsoid's support, q < 2 ([`pair_gradient`]'s q, to the
+/// bit): beyond it every term of the pair is zero. The neighbour lists' round support holds
+/// the ellipsoid's longest axis, so a flattened particle's list holds up to s^D times the
+/// neighbours its ellipsoid reaches; the passes leave the rest out before their sums.
+#[inline(always)]
+pub fn within<const D: usize>(ai: &[f64; 6], aj: &[f64; 6], xij: &[f64; D]) -> bool {
+    quadratic(ai, aj, xij).2 < 4.0
+}
+
 /// The pair's kernel gradient ∇_i W_ij, the pair's h along its line (|x_ij|/q, which the
 /// viscosity takes), and the mean metric's isotropic h, det(A_ij)^(−1/(2D)) (which the
 /// artificial stress's W(Δp) takes).
@@ -78,19 +109,10 @@ pub fn pair_gradient<const D: usize, K: Kernel>(
     aj: &[f64; 6],
     xij: &[f64; D],
 ) -> ([f64; D], f64, f64) {
-    let a: [f64; 6] = std::array::from_fn(|k| 0.5 * (ai[k] + aj[k]));
-    let ax: [f64; D] = std::array::from_fn(|r| {
-        let mut s = 0.0;
-        for (c, x) in xij.iter().enumerate() {
-            s += a[sym(r.min(c), r.max(c))] * x;
-        }
-        s
-    });
-    let mut q2 = 0.0;
+    let (a, ax, q2) = quadratic(ai, aj, xij);
     let mut r2 = 0.0;
-    for k in 0..D {
-        q2 += xij[k] * ax[k];
-        r2 += xij[k] * xij[k];
+    for x in xij {
+        r2 += x * x;
     }
     let det = determinant::<D>(&a);
     let root = det.max(0.0).sqrt();

@@ -286,7 +286,8 @@ fn correction<const D: usize, K: Kernel>(
 /// metric from b = F Fᵀ, A_i = F⁻ᵀ A_i⁰ Fᵀ: similar to the undeformed lattice's moment, so its
 /// eigenvalues, and the indicator, are the undeformed lattice's (`physics::tests`). Scalar,
 /// one neighbour at a time: the ellipsoid's pair gradient already costs the rate pass its
-/// lanes. The entries in the support are marked for the rate pass as [`moments`] marks them.
+/// lanes. The entries in the ellipsoid's support are marked for the rate pass, which queues
+/// them as its own filter would (the round support, then [`asph::within`]).
 fn ellipsoid_correction<const D: usize, K: Kernel>(
     kernel: K,
     i: usize,
@@ -300,7 +301,12 @@ fn ellipsoid_correction<const D: usize, K: Kernel>(
     let mut facing = Tensor::<D>::zeros();
     let mut mask: Support = [0; 2];
     for (k, &j) in list.iter().enumerate() {
-        let inside = in_support::<D, 1>(pi, &[j], points)[0];
+        let (xij, r2, hj) = separations::<D, 1>(pi, &[j], points);
+        let xij: [f64; D] = std::array::from_fn(|a| xij[a][0]);
+        let support = pi.h + hj[0];
+        let (ai, aj) = (&metric[i].a, &metric[j as usize].a);
+        // The rate pass's filter, to the bit (the round support, then the ellipsoid's).
+        let inside = r2[0] < support * support && r2[0] > 0.0 && asph::within(ai, aj, &xij);
         if !inside {
             continue;
         }
@@ -317,9 +323,7 @@ fn ellipsoid_correction<const D: usize, K: Kernel>(
             Counts::Facing => (1.0, &mut facing),
             Counts::Not => continue,
         };
-        let (xij, _, _) = separations::<D, 1>(pi, &[j], points);
-        let xij: [f64; D] = std::array::from_fn(|a| xij[a][0]);
-        let (grad, _, _) = asph::pair_gradient(kernel, &metric[i].a, &metric[j as usize].a, &xij);
+        let (grad, _, _) = asph::pair_gradient(kernel, ai, aj, &xij);
         let v = share * points.vol[j as usize];
         for a in 0..D {
             for b in 0..D {

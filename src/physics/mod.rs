@@ -1448,6 +1448,12 @@ fn particle_rates<
             }
         }
         cut_queue!(j, gj, inside);
+        // The ellipsoid's pairs beyond its support add nothing ([`asph::within`]).
+        let inside = if ELL {
+            inside && asph::within(&pass.metric[i].a, &pass.metric[j as usize].a, &xij)
+        } else {
+            inside
+        };
         queue!(j, gj, inside);
     }
     if pass.any_failed {
