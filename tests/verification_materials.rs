@@ -691,6 +691,15 @@ shape = { type = "box", min = [0.0, 0.0, 0.0], max = [0.01, 0.01, 0.01] }
 /// (−7.0 / −6.5 %), −0.556 / −0.553; with the tensor smoothing length 0.08 / 0.08 %, 24 /
 /// 216, 0.4185 / 0.4296 (−4.7 / −2.2 %), −0.566 / −0.577: its block flows the most evenly,
 /// its core's triaxiality the nearest to −1/√3.
+///
+/// Since 2026-12-06 the test runs the block's quarter x, y ≥ 0 on two symmetry planes
+/// (`examples/jc_failure_compression_quarter.toml`), at a quarter of the cost (64 s for the six
+/// runs, 4.5 minutes before); the core is the quarter's, the counts a quarter of the block's.
+/// It reads the whole block's figures: (core failed of 25 / 100; εp at failure) conventional
+/// SPH 18 / 72, 0.3886 / 0.3977 (−11.50 / −9.42 %); CN-SPH 22 / 49, 0.4081 / 0.4096 (−7.06 /
+/// −6.71 %); tensor 6 / 52, 0.4185 / 0.4295 (−4.69 / −2.18 %); the coarse ones the block's to
+/// the digit, the fine ones within 0.2 points (the whole block's bands are not quite
+/// symmetric there).
 #[test]
 fn johnson_cook_failure_in_plane_strain_compression() {
     use strike::case::Formulation;
@@ -707,7 +716,7 @@ fn johnson_cook_failure_in_plane_strain_compression() {
         (Formulation::Corrected, false),
     ] {
         let mut errors = Vec::new();
-        for mut case in two_resolutions("jc_failure_compression") {
+        for mut case in two_resolutions("jc_failure_compression_quarter") {
             case.simulation.formulation = formulation;
             case.simulation.tensor_smoothing = tensor;
             let dp = case.bodies[0].spacing;
@@ -748,10 +757,11 @@ fn johnson_cook_failure_in_plane_strain_compression() {
                 }
                 let sigma_eq = mean(&|i| strike::tensor::von_mises(&p.s[i].full()));
                 triaxiality += mean(&|i| -p.p[i] / strike::tensor::von_mises(&p.s[i].full()));
-                // The platens' gap, the block's height: the nominal equivalent strain rate of
-                // plane strain, 2/√3 v/H.
-                let (lo, hi) = extent_y(p, 0);
-                let rate = 2.0 / 3f64.sqrt() * closing / (hi - lo + dp);
+                // The platens' gap, the block's height (twice the quarter's, whose lowest
+                // particles lie Δp/2 above the plane y = 0): the nominal equivalent strain
+                // rate of plane strain, 2/√3 v/H.
+                let (_, hi) = extent_y(p, 0);
+                let rate = 2.0 / 3f64.sqrt() * closing / (2.0 * hi + dp);
                 let t_star = (chi * mean(&|i| p.plastic_work[i]) / c_p) / (t_melt - t_room);
                 let y = (a + b * eps_p.powf(n)) * (1.0 + c * rate.ln()) * (1.0 - t_star.powf(m));
                 worst_flow = worst_flow.max((sigma_eq / y - 1.0).abs());
@@ -773,9 +783,11 @@ fn johnson_cook_failure_in_plane_strain_compression() {
                 worst_flow < 0.04,
                 "flow stress off Johnson–Cook by {worst_flow}"
             );
-            let across = (core.len() as f64).sqrt();
+            // Two bands' worth of the whole core, twice as many particles as it has across
+            // (twice the quarter's): a quarter of that in the quarter.
+            let across = 2.0 * (core.len() as f64).sqrt();
             assert!(
-                strains.len() as f64 >= 2.0 * across,
+                strains.len() as f64 >= 2.0 * across / 4.0,
                 "{} of {} core particles failed ({across} across)",
                 strains.len(),
                 core.len()
