@@ -3039,6 +3039,27 @@ shape = { type = "rectangle", min = [0.0, 0.0], max = [8.0e-3, 6.0e-3] }
         crate::setup::build::<2>(&case).unwrap()
     }
 
+    /// The largest error of the pass's velocity gradient against G, relative to |G|.
+    fn worst_gradient(r: &Rates<2>, g: &Tensor<2>) -> f64 {
+        r.particles
+            .as_slice()
+            .iter()
+            .map(|x| (x.grad_v - g).norm() / g.norm())
+            .fold(0.0, f64::max)
+    }
+
+    /// The forces of the pass are antisymmetric: Σ m a = 0 to round-off of Σ |m a|.
+    fn assert_no_net_force(p: &Particles<2>, r: &Rates<2>) {
+        let force: Vector<2> = (0..p.n_real).map(|i| r.particles[i].acc * p.m[i]).sum();
+        let scale: f64 = (0..p.n_real)
+            .map(|i| (r.particles[i].acc * p.m[i]).norm())
+            .sum();
+        assert!(
+            force.norm() < 1e-12 * scale,
+            "net force {force:?} of {scale}"
+        );
+    }
+
     /// CN-SPH through the pass: a linear velocity field v = G x gives L = G to round-off at
     /// every particle of a block, faces and corners included, on a perturbed lattice; the
     /// conventional pass is off at the surface. Forces stay antisymmetric: Σ m a = 0.
@@ -3067,23 +3088,10 @@ shape = { type = "rectangle", min = [0.0, 0.0], max = [8.0e-3, 6.0e-3] }
             all_rates(&p, &nl, &model, &b),
             all_rates(&p, &nl, &model, &[]),
         );
-        let worst = |r: &Rates<2>| {
-            r.particles
-                .as_slice()
-                .iter()
-                .map(|x| (x.grad_v - g).norm() / g.norm())
-                .fold(0.0, f64::max)
-        };
+        let worst = |r: &Rates<2>| worst_gradient(r, &g);
         assert!(worst(&cn) < 1e-12, "CN-SPH: {}", worst(&cn));
         assert!(worst(&plain) > 0.3, "conventional: {}", worst(&plain));
-        let force: Vector<2> = (0..p.n_real).map(|i| cn.particles[i].acc * p.m[i]).sum();
-        let scale: f64 = (0..p.n_real)
-            .map(|i| (cn.particles[i].acc * p.m[i]).norm())
-            .sum();
-        assert!(
-            force.norm() < 1e-12 * scale,
-            "net force {force:?} of {scale}"
-        );
+        assert_no_net_force(&p, &cn);
     }
 
     /// CN-SPH with the tensor smoothing length: on a block deformed by F (a sheared stretch,
@@ -3128,27 +3136,14 @@ shape = { type = "rectangle", min = [0.0, 0.0], max = [8.0e-3, 6.0e-3] }
         let same = correction::same_body(&p);
         correction::corrections(CubicSpline, &p, &nl, same, &(0..p.n_real), &mut round, &[]);
         let round: Vec<Tensor<2>> = round.iter().map(|c| c.b).collect();
-        let worst = |r: &Rates<2>| {
-            r.particles
-                .as_slice()
-                .iter()
-                .map(|x| (x.grad_v - g).norm() / g.norm())
-                .fold(0.0, f64::max)
-        };
+        let worst = |r: &Rates<2>| worst_gradient(r, &g);
         let (ell, off) = (
             all_rates(&p, &nl, &model, &bs),
             all_rates(&p, &nl, &model, &round),
         );
         assert!(worst(&ell) < 1e-12, "ellipsoid: {}", worst(&ell));
         assert!(worst(&off) > 0.3, "round moments: {}", worst(&off));
-        let force: Vector<2> = (0..p.n_real).map(|i| ell.particles[i].acc * p.m[i]).sum();
-        let scale: f64 = (0..p.n_real)
-            .map(|i| (ell.particles[i].acc * p.m[i]).norm())
-            .sum();
-        assert!(
-            force.norm() < 1e-12 * scale,
-            "net force {force:?} of {scale}"
-        );
+        assert_no_net_force(&p, &ell);
         // The indicator against the undeformed block's, particle by particle.
         let mut nl0 = NeighborList::default();
         nl0.build(&undeformed.x, &undeformed.h, undeformed.n_real, 0.0);
@@ -3263,13 +3258,7 @@ shape = { type = "rectangle", min = [0.0, 0.0], max = [8.0e-3, 6.0e-3] }
             if lifting {
                 let mut b: Vec<Tensor<2>> = c.iter().map(|c| c.b).collect();
                 b.resize(p.len(), Tensor::identity());
-                let rates = all_rates(&p, &nl, &model, &b);
-                let worst = rates
-                    .particles
-                    .as_slice()
-                    .iter()
-                    .map(|r| (r.grad_v - g).norm() / g.norm())
-                    .fold(0.0, f64::max);
+                let worst = worst_gradient(&all_rates(&p, &nl, &model, &b), &g);
                 assert!(worst < 1e-12, "L against G: {worst}");
             }
         }
