@@ -1294,6 +1294,21 @@ fn profile_at(profile: &[(f64, f64)], z: f64) -> f64 {
     }
 }
 
+/// Johnson & Cook's copper rods in the continuum of the same model on the same wall
+/// (`examples/taylor_fe_axisymmetric.py --material ofhc`, axisymmetric finite elements, a
+/// frictionless wall the face may leave): final length and impact-face diameter (m) at 190,
+/// 146 and 130 m/s with 32 elements across R0 (0.119 mm), measured 2026-12-06. With 8 / 16 /
+/// 32 elements: lengths 17.320 / 17.340 / 17.355, 19.794 / 19.804 / 19.813 and 20.655 /
+/// 20.662 / 20.669 mm; faces 14.532 / 14.670 / 14.744, 12.012 / 12.086 / 12.133 and 11.235 /
+/// 11.294 / 11.325 mm, still widening by 0.3–0.6 % (extrapolated). Against the recovered
+/// rods the model itself is 5.7–7.1 % long and 8.7–14.3 % wide: Johnson & Cook's constants on
+/// a frictionless anvil, not the numerics.
+const OFHC_RODS_ON_THE_WALL: [(f64, f64); 3] = [
+    (17.355e-3, 14.744e-3),
+    (19.813e-3, 12.133e-3),
+    (20.669e-3, 11.325e-3),
+];
+
 /// Johnson & Cook's (1983) cylinder-impact tests of OFHC copper (`examples/taylor_ofhc.toml`:
 /// L0 = 25.4 mm, D0 = 7.62 mm onto a hardened anvil, here the wall z = 0), with the
 /// library's `ofhc_copper` and its Johnson–Cook constants from the same paper, failure off (the
@@ -1303,24 +1318,34 @@ fn profile_at(profile: &[(f64, f64)], z: f64) -> f64 {
 /// github.com/bbanerjee/HighRateExptData; its digitised profiles of the same rods read faces
 /// 3.5–4 % narrower, the uncertainty of the face). The model was fitted to torsion and
 /// Hopkinson-bar data, not to these rods, so the check is a prediction: the final length
-/// within 12 % and the face within 10 % at the finest spacing, each converging; the figures
-/// draw each run's profile over the recovered rod's (`OFHC_RODS`). Coarse:
-/// 190 m/s at R0/Δp = 8 and 12 (about a minute and a half on 2 cores); `fine`: all three
-/// speeds at 8 and 16 (about ten minutes).
+/// within 12 % of the test's at the finest spacing.
+///
+/// Convergence is judged against the continuum of the same model on the same wall
+/// ([`OFHC_RODS_ON_THE_WALL`]), not against the tests: that continuum is itself 5.7–7.1 % long
+/// and 8.7–14.3 % wide of them, so a run that converges moves its face away from the test's
+/// (until 2026-12-06 the faces at 146 and 130 m/s, widening with refinement past the tests',
+/// were read as strike's error). Against the continuum the length is held within 5 % and the
+/// face within 12 % at the finest spacing (8 % with `fine`), each error no larger than at the
+/// coarser one; the faces against the tests are reported. Measured 2026-12-06 against the
+/// continuum, R0/Δp = 8 / 16: lengths +6.8 / +2.6 %, +3.5 / +1.0 %, +2.7 / +0.6 % and faces
+/// −14.3 / −5.9 %, −10.3 / −5.2 %, −8.7 / −4.8 % at 190 / 146 / 130 m/s (at 12, 190 m/s:
+/// +3.7 % and −10.3 %). The figures draw each run's profile over the recovered rod's
+/// (`OFHC_RODS`) and the continuum's face. Coarse: 190 m/s at R0/Δp = 8 and 12 (about a
+/// minute and a half on 2 cores); `fine`: all three speeds at 8 and 16 (about ten minutes).
 pub fn taylor_ofhc(fine: bool) -> Result<Outcome> {
     const L0: f64 = 25.4e-3;
     const D0: f64 = 7.62e-3;
     let source = "Johnson & Cook 1983 tests (Zerilli & Armstrong 1987)";
-    let rods = if fine {
-        &OFHC_RODS[..]
-    } else {
-        &OFHC_RODS[..1]
-    };
+    let continuum = "axisymmetric finite elements, same model and wall (taylor_fe_axisymmetric.py)";
+    let speeds = if fine { 3 } else { 1 };
     let ratios: &[f64] = if fine { &[8.0, 16.0] } else { &[8.0, 12.0] };
+    let face_tolerance = if fine { 0.08 } else { 0.12 };
     let finest = ratios[ratios.len() - 1];
     let mut checks = Vec::new();
     let mut figures = Vec::new();
-    for &(speed, length, face, rod) in rods {
+    for (&(speed, length, face, rod), &(fe_length, fe_face)) in
+        OFHC_RODS.iter().zip(&OFHC_RODS_ON_THE_WALL).take(speeds)
+    {
         let (mut prev_l, mut prev_d) = (None, None);
         let mut profiles = Vec::new();
         for &ratio in ratios {
@@ -1329,28 +1354,49 @@ pub fn taylor_ofhc(fine: bool) -> Result<Outcome> {
             case.bodies[0].velocity = [0.0, 0.0, -speed];
             let r = taylor_run(&case)?;
             let s = format!("{speed} m/s, R0/Δp = {ratio}");
-            for (what, got, want, tol, previous) in [
-                ("final length", r.length, length * L0, 0.12, &mut prev_l),
-                ("impact-face diameter", r.face, face * D0, 0.10, &mut prev_d),
-            ] {
-                let c = Check::new(what, &s, got, "m", source);
-                checks.push(if ratio == finest {
+            let hold = |c: Check, want: f64, tol: f64| {
+                if ratio == finest {
                     c.within(want, tol)
                 } else {
                     c.reported(want)
-                });
-                // The length converges at every speed; the face at 190 m/s. At 146 and
-                // 130 m/s the face widens past the tests' with refinement (README, Not yet):
-                // reported, not held.
-                if what == "final length" || speed >= 190.0 {
-                    converges(
-                        &mut checks,
-                        previous,
-                        (got / want - 1.0).abs(),
-                        &format!("{what} error, finer against coarser"),
-                        &s,
-                    );
                 }
+            };
+            checks.push(hold(
+                Check::new("final length", &s, r.length, "m", source),
+                length * L0,
+                0.12,
+            ));
+            checks.push(
+                Check::new("impact-face diameter", &s, r.face, "m", source).reported(face * D0),
+            );
+            for (what, got, want, tol, previous) in [
+                ("final length", r.length, fe_length, 0.05, &mut prev_l),
+                (
+                    "impact-face diameter",
+                    r.face,
+                    fe_face,
+                    face_tolerance,
+                    &mut prev_d,
+                ),
+            ] {
+                checks.push(hold(
+                    Check::new(
+                        format!("{what} against the continuum"),
+                        &s,
+                        got,
+                        "m",
+                        continuum,
+                    ),
+                    want,
+                    tol,
+                ));
+                converges(
+                    &mut checks,
+                    previous,
+                    (got / want - 1.0).abs(),
+                    &format!("{what} error against the continuum, finer against coarser"),
+                    &s,
+                );
             }
             profiles.push((ratio, r.profile));
         }
@@ -1371,6 +1417,10 @@ pub fn taylor_ofhc(fine: bool) -> Result<Outcome> {
         series.push((
             "test face radius".into(),
             vec![0.5 * face * D0 * 1e3; z.len()],
+        ));
+        series.push((
+            "continuum face radius".into(),
+            vec![0.5 * fe_face * 1e3; z.len()],
         ));
         series.push(("initial radius".into(), vec![0.5 * D0 * 1e3; z.len()]));
         figures.push(Figure {
