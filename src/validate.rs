@@ -303,7 +303,7 @@ pub fn cases() -> Vec<CaseDef> {
         },
         CaseDef {
             name: "taylor_ofhc",
-            title: "Taylor tests, OFHC copper, Johnson–Cook, against Johnson & Cook's rods (VALIDATION.md §F)",
+            title: "Taylor tests, OFHC copper, Johnson–Cook, against Johnson & Cook's rods and the model's continuum (VALIDATION.md §F)",
             run: taylor_ofhc,
         },
         CaseDef {
