@@ -411,9 +411,8 @@ fn taylor_measure_reads_a_known_rod_and_no_single_particle_moves_it() {
 /// elements, `examples/taylor_fe_axisymmetric.py --material ofhc`: 17.355 and 14.744 mm),
 /// within 5 % and 12 % of it at 12 (+6.8 / +3.7 % and −14.3 / −10.3 % at 8 / 12, 2026-12-06;
 /// the face against the test's, −6.9 / −2.4 %, is reported: the continuum is 8.7 % wider than
-/// the test). The library's
-/// failure is off, as the rods were whole. With it on, the spall model breaks the rod (README,
-/// Not yet) and the test fails.
+/// the test). The library's failure is off, as the rods were whole. With it on, the spall
+/// model breaks the rod (README, Not yet) and the test fails.
 #[test]
 fn ofhc_copper_taylor_rods_converge_on_their_continuum_and_match_the_tests_length() {
     validated(strike::validate::taylor_ofhc(false));
